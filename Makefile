@@ -1,0 +1,48 @@
+# The two commands a newcomer needs (README.md):
+#   make demo   create .venv if missing, install with the locked versions, run the demo
+#   make test   same setup, then lint, type-check and run the whole test suite
+# Others: make lock (re-resolve constraints.txt), make bench, make clean.
+
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed-stamp
+PYTEST_ARGS ?=
+
+.PHONY: demo test lint lock bench clean
+
+$(STAMP): pyproject.toml constraints.txt
+	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' \
+		|| { echo "multiarm needs Python >= 3.11: run 'make PYTHON=python3.11 ...'"; exit 1; }
+	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --disable-pip-version-check \
+		-c constraints.txt -e ".[analysis,dev]"
+	@touch $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/multiarm demo
+
+lint: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy
+
+test: lint
+	$(BIN)/python -m pytest -n 2 $(PYTEST_ARGS)
+
+bench: $(STAMP)
+	$(BIN)/python -m benchmarks
+
+# Re-resolve every dependency and rewrite the lock (constraints.txt).
+lock:
+	rm -rf .lock-venv
+	$(PYTHON) -m venv .lock-venv
+	.lock-venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[analysis,dev]"
+	{ echo "# Lock file: exact versions for every install (make demo/test use it)."; \
+	  echo "# Regenerate with 'make lock' after changing pyproject.toml."; \
+	  .lock-venv/bin/python -m pip freeze --exclude-editable --all \
+		| grep -v -E '^(pip|setuptools|wheel)=='; } > constraints.txt
+	rm -rf .lock-venv
+
+clean:
+	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis build *.egg-info

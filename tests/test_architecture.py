@@ -1,0 +1,70 @@
+"""The import direction of DESIGN.md, enforced (import-linter contracts in
+pyproject.toml), and the packaging promises (py.typed, one exception root)."""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ["multiarm", "tasklib", "zones", "scheduler", "workcell"]
+
+
+def test_import_contracts_hold() -> None:
+    lint = Path(sys.executable).with_name("lint-imports")
+    proc = subprocess.run(
+        [str(lint), "--config", str(ROOT / "pyproject.toml")],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "2 kept, 0 broken" in proc.stdout
+
+
+def test_a_broken_layer_is_detected(tmp_path: Path) -> None:
+    # The contract must be able to fail: a copy of the tree in which zones
+    # imports scheduler breaks it.
+    import shutil
+
+    for pkg in PACKAGES:
+        shutil.copytree(ROOT / pkg, tmp_path / pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    (tmp_path / "zones" / "_bad.py").write_text("import scheduler\n")
+    lint = Path(sys.executable).with_name("lint-imports")
+    proc = subprocess.run(
+        [str(lint), "--config", str(tmp_path / "pyproject.toml")],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        check=False,
+        env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"},
+    )
+    assert proc.returncode != 0
+    assert "zones._bad -> scheduler" in proc.stdout
+
+
+@pytest.mark.parametrize("pkg", PACKAGES)
+def test_package_is_typed(pkg: str) -> None:
+    assert (ROOT / pkg / "py.typed").is_file()
+
+
+def test_every_module_imports() -> None:
+    for pkg in PACKAGES:
+        mod = importlib.import_module(pkg)
+        for info in pkgutil.walk_packages(mod.__path__, prefix=f"{pkg}."):
+            importlib.import_module(info.name)
+
+
+def test_one_exception_root() -> None:
+    import multiarm.errors as e
+
+    for name in e.__all__:
+        cls = getattr(e, name)
+        assert issubclass(cls, e.MultiarmError), name
