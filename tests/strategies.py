@@ -1,0 +1,241 @@
+"""Hypothesis strategies shared by the tests."""
+
+from __future__ import annotations
+
+import math
+
+from hypothesis import strategies as st
+
+from tasklib.pose import quat_from_rpy
+from tasklib.tdl import CELL_FRAME, Frame, Segment, TDLDocument, Trajectory, Waypoint
+
+names = st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,10}", fullmatch=True).filter(
+    lambda s: s != CELL_FRAME
+)
+coords = st.floats(allow_nan=False, allow_infinity=False, width=64)
+small_coords = st.floats(-10.0, 10.0, allow_nan=False)
+angles = st.floats(-2 * math.pi, 2 * math.pi, allow_nan=False)
+fractions = st.floats(0.0, 1.0, exclude_min=True, allow_nan=False)
+
+
+@st.composite
+def unit_quats(draw: st.DrawFn) -> tuple[float, float, float, float]:
+    return quat_from_rpy(draw(angles), draw(angles), draw(angles))
+
+
+points3 = st.tuples(coords, coords, coords)
+
+
+@st.composite
+def waypoints(draw: st.DrawFn) -> Waypoint:
+    return Waypoint(
+        draw(points3),
+        draw(st.none() | unit_quats()),
+        draw(st.booleans()),
+        draw(st.none() | fractions),
+    )
+
+
+@st.composite
+def segments(draw: st.DrawFn) -> Segment:
+    return Segment(
+        tuple(draw(st.lists(waypoints(), min_size=1, max_size=4))),
+        draw(st.sampled_from(["taught", "learned"])),
+        draw(st.none() | st.text(max_size=12)),
+        draw(st.sampled_from(["linear", "axis"])),
+        draw(st.none() | fractions),
+    )
+
+
+@st.composite
+def tdl_documents(draw: st.DrawFn) -> TDLDocument:
+    frame_names = draw(st.lists(names, max_size=4, unique=True))
+    frames = []
+    for i, name in enumerate(frame_names):
+        parent = draw(st.sampled_from([CELL_FRAME, *frame_names[:i]]))
+        frames.append(Frame(name, draw(points3), draw(unit_quats()), parent))
+    traj_names = draw(st.lists(names, max_size=4, unique=True))
+    trajs = [
+        Trajectory(
+            name,
+            tuple(draw(st.lists(segments(), min_size=1, max_size=3))),
+            draw(st.sampled_from([CELL_FRAME, *frame_names])),
+            draw(fractions),
+        )
+        for name in traj_names
+    ]
+    return TDLDocument(tuple(frames), tuple(trajs))
+
+
+TDL_TOKENS = [
+    "frame",
+    "trajectory",
+    "taught",
+    "learned",
+    "via",
+    "stop",
+    "quat",
+    "rpy",
+    "speed",
+    "interp",
+    "linear",
+    "axis",
+    "in",
+    "cell",
+    "=",
+    "{",
+    "}",
+    "(",
+    ")",
+    ",",
+    "0",
+    "1",
+    "-2.5e3",
+    "1e999",
+    "0.5",
+    "x",
+    "y",
+    '"rec"',
+    "# c\n",
+    "\n",
+    "@",
+    '"',
+]
+tdl_token_soup = st.lists(st.sampled_from(TDL_TOKENS), max_size=40).map(" ".join)
+
+
+# ------------------------------------------------------------- task steps
+
+from tasklib.arrivals import (  # noqa: E402
+    Feeder,
+    FixedArrivals,
+    PoissonArrivals,
+    TraceArrivals,
+    UniformArrivals,
+)
+from tasklib.model import Part, PartGroup, Task, TaskSet  # noqa: E402
+from tasklib.pose import Pose  # noqa: E402
+from tasklib.steps import (  # noqa: E402
+    Actuate,
+    Approach,
+    Depart,
+    Detect,
+    Dwell,
+    ForceSearch,
+    Grasp,
+    Insert,
+    Move,
+    Release,
+    SetFlag,
+    UseTool,
+    WaitFlag,
+)
+
+PART_NAMES = ("pa", "pb", "pc")
+positive = st.floats(1e-9, 1e6, allow_nan=False)
+nonneg = st.floats(0.0, 1e6, allow_nan=False)
+
+
+@st.composite
+def poses(draw: st.DrawFn) -> Pose:
+    return Pose(draw(points3), draw(unit_quats()))
+
+
+def step_strategy(trajectory: str | None, tool: str | None) -> st.SearchStrategy[object]:
+    part = st.none() | st.sampled_from(PART_NAMES)
+    options = [
+        st.builds(
+            Move, target=poses(), interpolation=st.sampled_from(["linear", "axis"]), speed=fractions
+        ),
+        st.builds(Approach, poses(), positive, fractions),
+        st.builds(Depart, positive, fractions),
+        st.builds(Grasp, part, nonneg),
+        st.builds(Release, part, nonneg),
+        st.builds(
+            Insert,
+            st.sampled_from(PART_NAMES),
+            poses(),
+            positive,
+            fractions,
+            st.builds(
+                ForceSearch,
+                st.integers(1, 50),
+                positive,
+                st.sampled_from(["spiral", "grid"]),
+                positive,
+                positive,
+            ),
+        ),
+        st.builds(Actuate, names, names, nonneg),
+        st.builds(
+            Detect, poses(), poses(), st.sampled_from(["search", "measure"]), fractions, part
+        ),
+        st.builds(SetFlag, st.just("f1")),
+        st.builds(WaitFlag, st.just("f1"), st.none() | positive),
+        st.builds(Dwell, nonneg),
+    ]
+    if trajectory is not None:
+        options.append(st.builds(Move, trajectory=st.just(trajectory), speed=fractions))
+    if tool is not None:
+        options.append(st.builds(UseTool, st.just(tool), positive))
+    return st.one_of(options)
+
+
+arrival_models = st.one_of(
+    st.just(FixedArrivals(())),
+    st.builds(PoissonArrivals, positive, nonneg, st.booleans()),
+    st.tuples(nonneg, nonneg).map(lambda lh: UniformArrivals(min(lh), max(lh))),
+    st.builds(
+        lambda ts: TraceArrivals(tuple((t, p) for t, p in zip(ts, PART_NAMES, strict=False))),
+        st.lists(nonneg, min_size=3, max_size=3),
+    ),
+)
+
+
+@st.composite
+def task_sets(draw: st.DrawFn) -> TaskSet:
+    """Small random task sets using every record and step kind."""
+    doc = draw(tdl_documents())
+    traj = doc.trajectories[0].name if doc.trajectories else None
+    n = draw(st.integers(1, 5))
+    tasks = []
+    for i in range(n):
+        tool = draw(st.none() | st.sampled_from(["press", "drill"]))
+        steps = draw(st.lists(step_strategy(traj, tool), min_size=1, max_size=5))
+        prereqs = (
+            draw(st.lists(st.sampled_from([f"t{j}" for j in range(i)]), unique=True)) if i else []
+        )
+        tasks.append(
+            Task(
+                f"t{i}",
+                tuple(steps),
+                tuple(draw(st.lists(names, unique=True, max_size=2))),
+                tool,
+                tuple(prereqs),
+                tuple(draw(st.lists(st.sampled_from(PART_NAMES), unique=True, max_size=2))),
+                (),
+                draw(st.text(max_size=10)),
+            )
+        )
+    # the flag is waited for only if someone sets it
+    if any(isinstance(s, WaitFlag) for t in tasks for s in t.steps) and not any(
+        isinstance(s, SetFlag) for t in tasks for s in t.steps
+    ):
+        tasks[0] = Task(
+            tasks[0].id,
+            (*tasks[0].steps, SetFlag("f1")),
+            tasks[0].capabilities,
+            tasks[0].tool,
+            tasks[0].prerequisites,
+            tasks[0].consumes,
+            (),
+            tasks[0].description,
+        )
+    feeder = Feeder("tray", PART_NAMES, draw(points3), draw(arrival_models), draw(nonneg))
+    parts = (Part("pa"), Part("pb", ("pa",)), Part("pc", ("pa",)))
+    groups = (PartGroup("g", ("pb", "pc")),) if draw(st.booleans()) else ()
+    # avoid flag cycles: a waiter listing the setter as successor is possible
+    # only through prerequisites, which go to earlier tasks; setter is t0.
+    return TaskSet(
+        "random", tuple(tasks), parts, (feeder,), groups, doc, draw(st.text(max_size=20))
+    )

@@ -1,0 +1,40 @@
+"""The ``multiarm`` command: a thin layer, errors as one line, no traceback."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from workcell.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_demo_prints_every_example(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["demo"]) == 0
+    out = capsys.readouterr().out
+    for name in ("supersigma", "scara4", "cell8"):
+        assert name in out
+    assert "depth" in out
+
+
+def test_check_good_and_bad_files(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    good = ROOT / "tasklib" / "examples" / "supersigma.tdl"
+    assert main(["check", str(good)]) == 0
+    assert "6 trajectories" in capsys.readouterr().out
+    bad = tmp_path / "bad.tdl"
+    bad.write_text("trajectory t {\n  taught { stop (0, 0) }\n}\n")
+    assert main(["check", str(bad)]) == 1
+    err = capsys.readouterr().err
+    assert f"{bad}:2:22:" in err and "Traceback" not in err
+    assert main(["check", str(tmp_path / "x.pdf")]) == 1
+    assert "unknown file type" in capsys.readouterr().err
+
+
+def test_console_script_runs() -> None:
+    exe = Path(sys.executable).with_name("multiarm")
+    proc = subprocess.run([str(exe), "--version"], capture_output=True, text=True, check=True)
+    assert proc.stdout.startswith("multiarm ")
