@@ -150,7 +150,13 @@ def _convert(
             line, column = _end_position(text)
         else:
             message = f"unexpected {token.value!r}"
-        names = set(exc.expected or ())
+        # ``accepts`` replays the parse to find what is really acceptable
+        # here; ``expected`` carries LALR's merged look-aheads and can list
+        # keywords that would not parse.
+        try:
+            names = set(exc.accepts or exc.expected or ())
+        except Exception:  # pragma: no cover - defensive: fall back to LALR's set
+            names = set(exc.expected or ())
     elif isinstance(exc, UnexpectedEOF):
         message = "unexpected end of input"
         line, column = _end_position(text)

@@ -16,6 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "BoolArray",
     "FloatArray",
     "IntArray",
     "JointVector",
@@ -32,6 +33,9 @@ FloatArray: TypeAlias = npt.NDArray[np.float64]
 
 IntArray: TypeAlias = npt.NDArray[np.int64]
 """Any int64 array."""
+
+BoolArray: TypeAlias = npt.NDArray[np.bool_]
+"""Any bool array."""
 
 Transform: TypeAlias = npt.NDArray[np.float64]
 """(4, 4) float homogeneous transform, metres."""

@@ -141,7 +141,9 @@ def poses(draw: st.DrawFn) -> Pose:
     return Pose(draw(points3), draw(unit_quats()))
 
 
-def step_strategy(trajectory: str | None, tool: str | None) -> st.SearchStrategy[object]:
+def step_strategy(
+    trajectory: str | None, tool: str | None, set_flags: bool = True
+) -> st.SearchStrategy[object]:
     part = st.none() | st.sampled_from(PART_NAMES)
     options = [
         st.builds(
@@ -170,7 +172,7 @@ def step_strategy(trajectory: str | None, tool: str | None) -> st.SearchStrategy
         st.builds(
             Detect, poses(), poses(), st.sampled_from(["search", "measure"]), fractions, part
         ),
-        st.builds(SetFlag, st.just("f1")),
+        st.builds(SetFlag, st.just("f1")) if set_flags else st.builds(Dwell, nonneg),
         st.builds(WaitFlag, st.just("f1"), st.none() | positive),
         st.builds(Dwell, nonneg),
     ]
@@ -201,7 +203,9 @@ def task_sets(draw: st.DrawFn) -> TaskSet:
     tasks = []
     for i in range(n):
         tool = draw(st.none() | st.sampled_from(["press", "drill"]))
-        steps = draw(st.lists(step_strategy(traj, tool), min_size=1, max_size=5))
+        # only t0 (which has no prerequisite) raises the flag, so flag edges
+        # never close a cycle with the prerequisites
+        steps = draw(st.lists(step_strategy(traj, tool, set_flags=i == 0), min_size=1, max_size=5))
         prereqs = (
             draw(st.lists(st.sampled_from([f"t{j}" for j in range(i)]), unique=True)) if i else []
         )
@@ -239,3 +243,150 @@ def task_sets(draw: st.DrawFn) -> TaskSet:
     return TaskSet(
         "random", tuple(tasks), parts, (feeder,), groups, doc, draw(st.text(max_size=20))
     )
+
+
+# ------------------------------------------------------------------ zones
+
+from zones.geometry import AABox, Cylinder, HalfSpaces, Hull, OBox, Sphere, Union  # noqa: E402
+from zones.model import Phase, Tool, Wall, Zone, ZoneMap  # noqa: E402
+
+
+@st.composite
+def _inside(
+    draw: st.DrawFn, lo: tuple[float, ...], hi: tuple[float, ...]
+) -> tuple[float, float, float]:
+    return tuple(draw(st.floats(l, h)) for l, h in zip(lo, hi, strict=True))  # type: ignore[return-value]
+
+
+@st.composite
+def zone_shapes(
+    draw: st.DrawFn, lo: tuple[float, ...], hi: tuple[float, ...], walls: list[str], depth: int = 0
+) -> object:
+    span = [h - l for l, h in zip(lo, hi, strict=True)]
+    kind = draw(
+        st.sampled_from(
+            ["aabox", "obox", "cyl", "sphere", "hull", "walls", "union"]
+            if depth == 0
+            else ["aabox", "sphere", "cyl"]
+        )
+    )
+    if kind == "aabox":
+        a = [draw(st.floats(l, l + 0.45 * s)) for l, s in zip(lo, span, strict=True)]
+        b = [draw(st.floats(l + 0.55 * s, h)) for l, h, s in zip(lo, hi, span, strict=True)]
+        return AABox(tuple(a), tuple(b))  # type: ignore[arg-type]
+    centre = [l + s / 2 + draw(st.floats(-0.1, 0.1)) * s for l, s in zip(lo, span, strict=True)]
+    small = min(span) * draw(st.floats(0.05, 0.2))
+    if kind == "obox":
+        size = tuple(small * draw(st.floats(0.5, 1.0)) for _ in range(3))
+        return OBox(tuple(centre), size, draw(st.floats(-math.pi, math.pi)))  # type: ignore[arg-type]
+    if kind == "cyl":
+        return Cylinder(tuple(centre), small, small * draw(st.floats(0.5, 2.0)))  # type: ignore[arg-type]
+    if kind == "sphere":
+        return Sphere(tuple(centre), small)  # type: ignore[arg-type]
+    if kind == "hull":
+        pts = [
+            tuple(c + small * draw(st.floats(-1, 1)) for c in centre)
+            for _ in range(draw(st.integers(4, 8)))
+        ]
+        pts += [
+            (centre[0] - small, centre[1] - small, centre[2] - small),
+            (centre[0] + small, centre[1], centre[2]),
+            (centre[0], centre[1] + small, centre[2]),
+            (centre[0], centre[1], centre[2] + small),
+        ]
+        return Hull(tuple(pts))  # type: ignore[arg-type]
+    if kind == "walls" and walls:
+        chosen = draw(
+            st.lists(st.sampled_from(walls), min_size=1, max_size=min(3, len(walls)), unique=True)
+        )
+        return HalfSpaces(tuple((w, draw(st.sampled_from([1, -1]))) for w in chosen))
+    parts = draw(st.lists(zone_shapes(lo, hi, walls, depth + 1), min_size=1, max_size=3))
+    return Union(tuple(parts))  # type: ignore[arg-type]
+
+
+@st.composite
+def zone_maps(draw: st.DrawFn) -> ZoneMap:
+    lo = tuple(draw(st.floats(-5, 0)) for _ in range(3))
+    hi = tuple(l + draw(st.floats(0.5, 5)) for l in lo)
+    wall_names = draw(st.lists(names, max_size=3, unique=True))
+    walls = []
+    for w in wall_names:
+        p = draw(_inside(lo, hi))
+        if draw(st.booleans()):
+            axis = draw(st.integers(0, 2))
+            point = [0.0, 0.0, 0.0]
+            point[axis] = p[axis]
+            normal = [0.0, 0.0, 0.0]
+            normal[axis] = 1.0
+            walls.append(Wall(w, tuple(point), tuple(normal)))  # type: ignore[arg-type]
+        else:
+            n = (draw(st.floats(-1, 1)), draw(st.floats(-1, 1)), draw(st.floats(0.1, 1)))
+            walls.append(Wall(w, p, n))
+    zone_names = draw(st.lists(names, min_size=1, max_size=5, unique=True))
+    zones = [
+        Zone(
+            z,
+            draw(zone_shapes(lo, hi, wall_names)),
+            draw(st.sampled_from(["exclusive", "shared"])),
+            draw(st.none() | st.floats(0.01, 5.0)),
+        )
+        for z in zone_names
+    ]
+    tools = [Tool(t, draw(_inside(lo, hi))) for t in draw(st.lists(names, max_size=2, unique=True))]
+    active = draw(st.none() | st.lists(st.sampled_from(zone_names), unique=True).map(tuple))
+    phases = [
+        Phase(p, tuple(draw(st.lists(st.sampled_from(zone_names), unique=True))))
+        for p in draw(st.lists(names, max_size=2, unique=True))
+    ]
+    return ZoneMap((lo, hi), tuple(zones), tuple(walls), tuple(tools), active, tuple(phases))  # type: ignore[arg-type]
+
+
+SDL_TOKENS = [
+    "cell",
+    "wall",
+    "zone",
+    "tool",
+    "rack",
+    "active",
+    "phase",
+    "exclusive",
+    "shared",
+    "box",
+    "center",
+    "size",
+    "yaw",
+    "cylinder",
+    "sphere",
+    "radius",
+    "height",
+    "hull",
+    "walls",
+    "union",
+    "mesh",
+    "speed_limit",
+    "point",
+    "normal",
+    "x",
+    "y",
+    "z",
+    "=",
+    "{",
+    "}",
+    "(",
+    ")",
+    ",",
+    "+",
+    "-",
+    "0",
+    "1",
+    "0.5",
+    "-2",
+    "1e999",
+    "a",
+    "b",
+    "w",
+    '"m.stl"',
+    "# c\n",
+    "\n",
+]
+sdl_token_soup = st.lists(st.sampled_from(SDL_TOKENS), max_size=50).map(" ".join)

@@ -9,8 +9,8 @@ Sub-commands:
 ``demo``
     Run the main job on the built-in example cells and print what it did.
 ``check FILE...``
-    Parse and validate files by extension: ``.tdl`` (trajectories), ``.toml``
-    / ``.json`` (task sets).
+    Parse and validate files by extension: ``.tdl`` (trajectories), ``.sdl``
+    (zones), ``.toml`` / ``.json`` (task sets).
 """
 
 from __future__ import annotations
@@ -36,8 +36,9 @@ def _print_table(rows: list[dict[str, Any]], columns: Sequence[str]) -> None:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    """Load the built-in example task sets and summarise them."""
+    """Load the built-in example task sets and zone maps and summarise them."""
     from tasklib import EXAMPLES
+    from zones import examples as zone_examples
 
     print(f"multiarm {__version__}: built-in example task sets\n")
     rows: list[dict[str, Any]] = [make().summary() for make in EXAMPLES.values()]
@@ -60,6 +61,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
         caps = ", ".join(s["capabilities"])
         tools = ", ".join(s["tools"]) or "none"
         print(f"{s['name']}: capabilities {caps}; tools {tools}")
+    print("\nbuilt-in zone maps (SDL)\n")
+    zrows = []
+    for name in zone_examples.EXAMPLES:
+        zs = zone_examples.load_example(name).summary()
+        zrows.append({"cell": name, **zs})
+    _print_table(
+        zrows, ["cell", "zones", "exclusive", "shared", "walls", "tools", "phases", "active"]
+    )
     return 0
 
 
@@ -76,7 +85,15 @@ def _check_one(path: Path) -> str:
         ts = load_taskset(path)
         s = ts.summary()
         return f"task set {s['name']!r}: {s['tasks']} tasks, {s['parts']} parts, depth {s['depth']}"
-    raise MultiarmError(f"{path}: unknown file type {suffix!r} (known: .tdl, .toml, .json)")
+    if suffix == ".sdl":
+        from zones import load_sdl
+
+        s = load_sdl(path).summary()
+        return (
+            f"{s['zones']} zones ({s['exclusive']} exclusive, {s['shared']} shared), "
+            f"{s['walls']} walls, {s['tools']} tools, {s['phases']} phases"
+        )
+    raise MultiarmError(f"{path}: unknown file type {suffix!r} (known: .tdl, .sdl, .toml, .json)")
 
 
 def cmd_check(args: argparse.Namespace) -> int:
@@ -102,7 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("demo", help="run the main job on the built-in example cells")
     p.set_defaults(func=cmd_demo)
-    p = sub.add_parser("check", help="parse and validate .tdl/.toml/.json files")
+    p = sub.add_parser("check", help="parse and validate .tdl/.sdl/.toml/.json files")
     p.add_argument("files", nargs="+", metavar="FILE")
     p.set_defaults(func=cmd_check)
     return parser
