@@ -47,6 +47,7 @@ __all__ = [
     "PlanningFailed",
     "SDLError",
     "SDLSyntaxError",
+    "ScheduleError",
     "SourceError",
     "TDLError",
     "TDLSyntaxError",
@@ -91,6 +92,10 @@ class CycleError(ValidationError):
 
     def __reduce__(self) -> tuple[object, ...]:
         return (type(self), (self.args[0], self.cycle), self.__dict__)
+
+
+class ScheduleError(ValidationError):
+    """A schedule breaks a constraint of its problem (the message names it)."""
 
 
 class UsageError(InputError):

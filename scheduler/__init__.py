@@ -1,1 +1,48 @@
-"""scheduler: the multi-arm task scheduler (SEEDS.md S2.10-S2.12)."""
+"""scheduler: the multi-arm task scheduler (SEEDS.md S2.10-S2.12).
+
+* :class:`Model` builds an immutable, validated :class:`Problem` (arms,
+  tasks, modes with zone windows and tools, setup times, an optional
+  blocking oracle); :func:`read_fjsp` reads FJSP benchmark files.
+* :func:`solve` runs a solver (``"tree"``, ``"greedy"``, ``"cpsat"``) and
+  returns a :class:`Result`; :func:`validate` checks any :class:`Schedule`
+  against every constraint and returns its makespan; :func:`lower_bound`
+  bounds the optimum.
+* :func:`reschedule` re-solves from a state of the cell (online).
+"""
+
+from scheduler.bounds import LowerBounds, lower_bound, lower_bounds
+from scheduler.fjsp import parse_fjsp, read_fjsp
+from scheduler.problem import BlockingOracle, Model, Problem, Window, load_problem, save_problem
+from scheduler.result import Result, SearchStats, SolveStatus
+from scheduler.schedule import Reservation, Schedule, ScheduleError, validate
+from scheduler.setup import FunctionSetup, MatrixSetup, NoSetup, Setup, TravelSetup
+from scheduler.solve import SOLVERS, SolverName, solve
+
+__all__ = [
+    "SOLVERS",
+    "BlockingOracle",
+    "FunctionSetup",
+    "LowerBounds",
+    "MatrixSetup",
+    "Model",
+    "NoSetup",
+    "Problem",
+    "Reservation",
+    "Result",
+    "Schedule",
+    "ScheduleError",
+    "SearchStats",
+    "Setup",
+    "SolveStatus",
+    "SolverName",
+    "TravelSetup",
+    "Window",
+    "load_problem",
+    "lower_bound",
+    "lower_bounds",
+    "parse_fjsp",
+    "read_fjsp",
+    "save_problem",
+    "solve",
+    "validate",
+]

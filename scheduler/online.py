@@ -1,0 +1,255 @@
+"""Online re-solving: a new plan from the cell's current state.
+
+When reality departs from the plan (a part arrives late, an arm faults, a
+detour takes longer), the coordinator calls :func:`reschedule` with a
+:class:`CellState`: the current time, the tasks finished or running (a
+frozen prefix: their arm, start, end and waits are kept as they are), the
+parts that arrived (new release times), arms that failed (they get no new
+task) and arms that are busy until some time. The result is a complete
+schedule consistent with the frozen prefix, in which every other task starts
+no earlier than now.
+
+The search starts from the previous schedule (same order and modes where
+still possible: a warm start), decodes it on top of the frozen prefix, and
+improves it with the tree search's local search until the time limit — by
+default a few milliseconds, what a real cell can afford.
+
+Examples
+--------
+>>> from scheduler.fjsp import parse_fjsp
+>>> from scheduler.solve import solve
+>>> p = parse_fjsp("2 2 1\\n2 1 1 3 2 1 4 2 2\\n1 2 1 2 2 1\\n")
+>>> plan = solve(p, "greedy").schedule
+>>> first = int(plan.start.argmin())
+>>> state = CellState(time=1.0, done={first: (int(plan.mode[first]), float(plan.start[first]),
+...                                          float(plan.end[first]))}, failed_arms={"M2"})
+>>> r = reschedule(p, state, plan, time_limit=0.05)
+>>> set(r.schedule.arms(p)[[t for t in range(p.n_tasks) if t != first]].tolist())
+{0}
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from multiarm.errors import UsageError
+from scheduler.problem import Problem
+from scheduler.result import Result, SearchStats, SolveStatus
+from scheduler.schedule import Schedule, validate
+from scheduler.search import Evaluator, local_search, rank_upward
+
+__all__ = ["CellState", "reschedule"]
+
+TaskRef = int | str
+ArmRef = int | str
+
+
+@dataclass
+class CellState:
+    """What the cell looks like now.
+
+    Attributes
+    ----------
+    time : float
+        Now (seconds, the schedule's clock).
+    done : mapping task -> (mode, start, end) or (mode, start, end, waits)
+        Finished tasks and tasks running now (with the end expected); kept
+        exactly. ``mode`` is the mode id (``problem.mode_of[arm, task]``).
+    releases : mapping task -> float
+        New release times (e.g. the expected arrival of a late part).
+    failed_arms : set of arms
+        Arms that take no new task.
+    arm_busy_until : mapping arm -> float
+        Arms that cannot start a new task before a time (e.g. being
+        repaired, or finishing an unplanned move).
+    """
+
+    time: float
+    done: Mapping[TaskRef, tuple[int, float, float] | tuple[int, float, float, list[float]]] = (
+        field(default_factory=dict)
+    )
+    releases: Mapping[TaskRef, float] = field(default_factory=dict)
+    failed_arms: set[ArmRef] = field(default_factory=set)
+    arm_busy_until: Mapping[ArmRef, float] = field(default_factory=dict)
+
+
+def _task(p: Problem, ref: TaskRef) -> int:
+    if isinstance(ref, str):
+        try:
+            return p.task_names.index(ref)
+        except ValueError:
+            raise UsageError(f"unknown task {ref!r}") from None
+    if not 0 <= int(ref) < p.n_tasks:
+        raise UsageError(f"task id {ref} out of range")
+    return int(ref)
+
+
+def _arm(p: Problem, ref: ArmRef) -> int:
+    if isinstance(ref, str):
+        try:
+            return p.arm_names.index(ref)
+        except ValueError:
+            raise UsageError(f"unknown arm {ref!r}") from None
+    if not 0 <= int(ref) < p.n_arms:
+        raise UsageError(f"arm id {ref} out of range")
+    return int(ref)
+
+
+def reschedule(
+    problem: Problem,
+    state: CellState,
+    previous: Schedule | None = None,
+    *,
+    time_limit: float = 0.015,
+    seed: int = 0,
+    waits: bool = True,
+    max_evaluations: int | None = None,
+) -> Result:
+    """A new schedule from ``state``, warm-started from ``previous``.
+
+    The search stops at ``time_limit`` seconds or after ``max_evaluations``
+    decoded schedules, whichever comes first (a work limit alone makes the
+    result depend on the seed only).
+
+    Raises
+    ------
+    UsageError
+        Unknown tasks or arms in the state, or a frozen task whose
+        predecessor is not frozen.
+    """
+    t0 = time.perf_counter()
+    p = problem
+    inst = p.instance
+    now = float(state.time)
+    frozen: dict[int, tuple[int, float, float, np.ndarray]] = {}
+    for ref, entry in state.done.items():
+        t = _task(p, ref)
+        m, s, e = int(entry[0]), float(entry[1]), float(entry[2])
+        if not (0 <= m < p.n_modes) or int(p.mode_task[m]) != t:
+            raise UsageError(f"task {p.task_names[t]!r}: mode {m} is not one of its modes")
+        w = (
+            np.asarray(entry[3], dtype=float)
+            if len(entry) > 3
+            else np.zeros(len(p.shapes[m].borders))
+        )
+        frozen[t] = (m, s, e, w)
+    for t in frozen:
+        for q in p.task_preds[t]:
+            if q not in frozen:
+                raise UsageError(
+                    f"task {p.task_names[t]!r} is done or running but its predecessor {p.task_names[q]!r} is not"
+                )
+    release = np.maximum(np.asarray(p.task_release, dtype=float), now)
+    for ref, r in state.releases.items():
+        release[_task(p, ref)] = max(float(r), now)
+    allowed = np.ones(p.n_modes, dtype=np.bool_)
+    for ref in state.failed_arms:
+        allowed[p.mode_arm == _arm(p, ref)] = False
+    arm_lb = np.full(p.n_arms, now)
+    for ref, until in state.arm_busy_until.items():
+        a = _arm(p, ref)
+        arm_lb[a] = max(arm_lb[a], float(until))
+    # the frozen prefix, committed in start order
+    base = inst.new_state()
+    for t in sorted(frozen, key=lambda t: (frozen[t][1], t)):
+        m, s, e, w = frozen[t]
+        # exactly where it was: after the arm's frozen tasks so far
+        a = int(p.mode_arm[m])
+        k = int(base.arm_n[a])
+        inst.commit(base, t, m, s, e, k, w)
+    remaining = [t for t in range(p.n_tasks) if t not in frozen]
+    ev = Evaluator(
+        p,
+        waits=waits,
+        base=base,
+        release=release,
+        allowed=allowed,
+        arm_lb=arm_lb,
+        frozen=frozenset(frozen),
+    )
+    stats = SearchStats()
+    # warm start: the previous order (by start) and modes where still allowed
+    key = np.zeros(p.n_tasks)
+    modes = np.full(p.n_tasks, -1, dtype=np.int64)
+    if previous is not None:
+        key = -np.asarray(previous.start, dtype=float)
+        for t in remaining:
+            m = int(previous.mode[t])
+            modes[t] = m if allowed[m] else -1
+    else:
+        key = rank_upward(p)
+    for t, (m, *_rest) in frozen.items():
+        modes[t] = m
+    order = _order(p, remaining, key)
+    sol = ev.evaluate(order, modes)
+    if sol is None:  # a previous mode cannot be placed any more: let every task choose
+        free = modes.copy()
+        free[remaining] = -1
+        sol = ev.evaluate(order, free)
+    # a cheap bound (the LP of lower_bound would eat the latency budget)
+    mind = p.min_duration()
+    lb = max(
+        [frozen[t][2] for t in frozen] + [float(release[t] + mind[t]) for t in remaining] + [0.0]
+    )
+    if sol is None:
+        stats.evaluations = ev.evaluations
+        return Result(
+            SolveStatus.UNKNOWN,
+            None,
+            math.inf,
+            lb,
+            time.perf_counter() - t0,
+            "reschedule",
+            seed,
+            stats,
+        )
+    stats.record(time.perf_counter() - t0, sol.makespan)
+    rng = np.random.default_rng(seed)
+    deadline = t0 + time_limit
+    if remaining and time.perf_counter() < deadline:
+        sol = local_search(
+            ev,
+            sol,
+            deadline,
+            rng,
+            lower=lb,
+            max_evaluations=max_evaluations,
+            on_improve=lambda s: stats.record(time.perf_counter() - t0, s.makespan),
+        )
+    sched = ev.schedule(sol)
+    stats.evaluations = ev.evaluations
+    mk = validate(p, sched)
+    return Result(
+        SolveStatus.FEASIBLE if mk > lb + 1e-9 else SolveStatus.OPTIMAL,
+        sched,
+        mk,
+        min(lb, mk),
+        time.perf_counter() - t0,
+        "reschedule",
+        seed,
+        stats,
+    )
+
+
+def _order(p: Problem, tasks: list[int], key: np.ndarray) -> np.ndarray:
+    """``tasks`` in a topological order, larger ``key`` first among ready ones."""
+    todo = set(tasks)
+    missing = {t: sum(1 for q in p.task_preds[t] if q in todo) for t in tasks}
+    heap = [(-key[t], t) for t in tasks if missing[t] == 0]
+    heapq.heapify(heap)
+    out = []
+    while heap:
+        _, t = heapq.heappop(heap)
+        out.append(t)
+        for s in p.task_succs[t]:
+            if s in missing:
+                missing[s] -= 1
+                if missing[s] == 0:
+                    heapq.heappush(heap, (-key[s], s))
+    return np.array(out, dtype=np.int64)

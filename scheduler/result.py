@@ -1,0 +1,101 @@
+"""What every solver returns: status, schedule, objective, bound, statistics."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Any
+
+from scheduler.schedule import Schedule
+
+__all__ = ["Result", "SearchStats", "SolveStatus"]
+
+
+class SolveStatus(StrEnum):
+    """How a solve ended. A time limit that expires is a status, not an error."""
+
+    OPTIMAL = "optimal"
+    """The schedule is proven optimal (objective equals the bound)."""
+    FEASIBLE = "feasible"
+    """A valid schedule, not proven optimal."""
+    INFEASIBLE = "infeasible"
+    """Proven to have no valid schedule."""
+    UNKNOWN = "unknown"
+    """No schedule found and nothing proven within the limits."""
+
+
+@dataclass
+class SearchStats:
+    """Search statistics (counts, and times in seconds from the solve's start)."""
+
+    nodes: int = 0
+    """Search-tree nodes expanded (beam and exact search)."""
+    pruned: int = 0
+    """Nodes cut by bounds, dominance or duplicates."""
+    evaluations: int = 0
+    """Complete schedules decoded (local search, restarts)."""
+    first_time: float = math.nan
+    """When the first valid schedule was found."""
+    best_time: float = math.nan
+    """When the best schedule was found."""
+    first_objective: float = math.inf
+    improvements: list[tuple[float, float]] = field(default_factory=list)
+    """(time, objective) each time the incumbent improved."""
+    phases: dict[str, float] = field(default_factory=dict)
+    """Seconds spent per phase."""
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def record(self, t: float, objective: float) -> None:
+        if math.isnan(self.first_time):
+            self.first_time = t
+            self.first_objective = objective
+        self.best_time = t
+        self.improvements.append((t, objective))
+
+
+@dataclass(frozen=True)
+class Result:
+    """The outcome of :func:`scheduler.solve`.
+
+    Attributes
+    ----------
+    status : SolveStatus
+    schedule : Schedule or None
+        Validated by :func:`scheduler.validate` before being returned.
+    objective : float
+        The schedule's makespan (inf without a schedule).
+    bound : float
+        The best proven lower bound on the optimum.
+    runtime : float
+        Wall-clock seconds.
+    solver : str
+    seed : int
+    stats : SearchStats
+    """
+
+    status: SolveStatus
+    schedule: Schedule | None
+    objective: float
+    bound: float
+    runtime: float
+    solver: str
+    seed: int
+    stats: SearchStats
+
+    @property
+    def gap(self) -> float:
+        """``(objective - bound) / objective`` (0 when optimal, inf without a schedule)."""
+        if self.schedule is None or not math.isfinite(self.objective):
+            return math.inf
+        if self.objective <= 0:
+            return 0.0
+        return max(0.0, (self.objective - self.bound) / self.objective)
+
+    def summary(self) -> str:
+        """One line for logs."""
+        return (
+            f"{self.solver}: {self.status.value}, makespan {self.objective:.6g}, bound {self.bound:.6g}, "
+            f"gap {100 * self.gap:.2f}%, {self.runtime:.3f}s, {self.stats.nodes} nodes, "
+            f"{self.stats.evaluations} evaluations"
+        )

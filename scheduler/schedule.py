@@ -1,0 +1,465 @@
+"""Schedules and the one validator of every constraint.
+
+A :class:`Schedule` says, for every task: its mode (hence its arm), start,
+end, the waits inserted at its mode's zone borders, and the blocking (detour)
+cost charged to it. :func:`validate` checks every constraint of the problem
+and returns the makespan it computes; every solver's tests, the benchmarks
+and the simulator compare schedules only through it (DESIGN.md).
+
+Examples
+--------
+>>> from scheduler.problem import Model
+>>> m = Model()
+>>> a = m.add_arm("a")
+>>> t0, t1 = m.add_task("t0"), m.add_task("t1", predecessors=["t0"])
+>>> m.add_mode(t0, a, 2.0); m.add_mode(t1, a, 3.0)
+>>> p = m.build()
+>>> validate(p, Schedule.from_starts(p, [0, 1], [0.0, 2.0]))
+5.0
+>>> validate(p, Schedule.from_starts(p, [0, 1], [0.0, 1.0]))
+Traceback (most recent call last):
+...
+multiarm.errors.ScheduleError: task 't1' starts at 1 before its predecessor 't0' ends at 2
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from multiarm.errors import ScheduleError, ValidationError
+from multiarm.types import FloatArray, IntArray
+
+if TYPE_CHECKING:
+    from scheduler.problem import Problem
+
+__all__ = ["Reservation", "Schedule", "ScheduleError", "blocking_required", "validate"]
+
+
+@dataclass(frozen=True, slots=True)
+class Reservation:
+    """One use of a resource: ``kind`` is ``"zone"`` (exclusive occupancy),
+    ``"move"`` (movement in a shared zone), ``"tool"`` or ``"start"`` (an arm
+    standing in its start zone until it leaves)."""
+
+    kind: Literal["zone", "move", "tool", "start"]
+    resource: str
+    task: str | None
+    arm: str
+    start: float
+    end: float
+
+
+@dataclass(frozen=True, eq=False)
+class Schedule:
+    """A complete schedule (see the module docstring).
+
+    Attributes
+    ----------
+    mode : (T,) int
+    start, end : (T,) float, seconds
+    waits : tuple of (k_t,) float
+        Per task, the wait at each border of its mode (zeros allowed).
+    blocking : (T,) float
+        Detour cost charged to each task (seconds).
+    """
+
+    mode: IntArray
+    start: FloatArray
+    end: FloatArray
+    waits: tuple[FloatArray, ...]
+    blocking: FloatArray
+    _arm: IntArray | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        for name in ("mode", "start", "end", "blocking"):
+            arr = np.array(getattr(self, name), dtype=np.int64 if name == "mode" else float)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        waits = tuple(np.array(w, dtype=float) for w in self.waits)
+        for w in waits:
+            w.setflags(write=False)
+        object.__setattr__(self, "waits", waits)
+
+    @classmethod
+    def from_starts(
+        cls,
+        problem: Problem,
+        modes: Sequence[int] | IntArray,
+        starts: Sequence[float] | FloatArray,
+        waits: Sequence[Sequence[float] | FloatArray] | None = None,
+        blocking: Sequence[float] | FloatArray | None = None,
+    ) -> Schedule:
+        """A schedule from modes and starts; ends are computed (duration +
+        waits + blocking), waits default to none."""
+        modes_a = np.asarray(modes, dtype=np.int64)
+        T = problem.n_tasks
+        w = (
+            tuple(np.asarray(x, dtype=float) for x in waits)
+            if waits is not None
+            else tuple(np.zeros(len(problem.shapes[int(m)].borders)) for m in modes_a)
+        )
+        b = np.zeros(T) if blocking is None else np.asarray(blocking, dtype=float)
+        starts_a = np.asarray(starts, dtype=float)
+        ends = (
+            np.array(
+                [
+                    starts_a[t] + problem.shapes[int(modes_a[t])].length(w[t]) + b[t]
+                    for t in range(T)
+                ]
+            )
+            if T
+            else np.zeros(0)
+        )
+        return cls(modes_a, starts_a, ends, w, b)
+
+    @property
+    def n_tasks(self) -> int:
+        return len(self.mode)
+
+    @property
+    def makespan(self) -> float:
+        """Largest end (0 for an empty schedule). Use :func:`validate` to check it."""
+        return float(self.end.max()) if len(self.end) else 0.0
+
+    def arms(self, problem: Problem) -> IntArray:
+        """(T,) int: the arm of every task."""
+        out: IntArray = problem.mode_arm[self.mode]
+        return out
+
+    def sequences(self, problem: Problem) -> list[list[int]]:
+        """Per arm, its tasks in start order."""
+        arms = self.arms(problem)
+        seqs: list[list[int]] = [[] for _ in range(problem.n_arms)]
+        for t in np.lexsort((np.arange(self.n_tasks), self.start)):
+            seqs[int(arms[t])].append(int(t))
+        return seqs
+
+    def total_wait(self) -> float:
+        """Sum of every wait at zone borders (the conflicts predicted), seconds."""
+        return float(sum(float(w.sum()) for w in self.waits))
+
+    def reservations(self, problem: Problem) -> list[Reservation]:
+        """Every use of an exclusive zone, shared-zone movement, tool and start zone."""
+        shapes = problem.shapes
+        Z = problem.n_zones
+        out: list[Reservation] = []
+        arms = self.arms(problem)
+        for t in range(self.n_tasks):
+            sh = shapes[int(self.mode[t])]
+            arm = problem.arm_names[arms[t]]
+            task = problem.task_names[t]
+            for r, s, e in sh.intervals(float(self.start[t]), self.waits[t]):
+                kind: Literal["zone", "move"] = "zone" if r < Z else "move"
+                out.append(Reservation(kind, problem.zone_names[r % Z], task, arm, s, e))
+            for r in sh.tools:
+                out.append(
+                    Reservation(
+                        "tool",
+                        problem.tool_names[r - 2 * Z],
+                        task,
+                        arm,
+                        float(self.start[t]),
+                        float(self.end[t]),
+                    )
+                )
+        for a, (z_list, dep) in enumerate(
+            zip(problem.arm_start_zones, self.departures(problem), strict=True)
+        ):
+            for z in z_list:
+                if problem.zone_exclusive[z]:
+                    out.append(
+                        Reservation(
+                            "start", problem.zone_names[z], None, problem.arm_names[a], 0.0, dep
+                        )
+                    )
+        return out
+
+    def departures(self, problem: Problem) -> list[float]:
+        """When each arm leaves its initial pose (inf if it never moves)."""
+        out = []
+        for a, seq in enumerate(self.sequences(problem)):
+            if seq:
+                out.append(float(self.start[seq[0]]) - problem.setup_time(a, -1, seq[0]))
+            else:
+                out.append(math.inf)
+        return out
+
+    # ------------------------------------------------------------ export
+    def to_dict(self, problem: Problem) -> dict[str, Any]:
+        """Plain data with names."""
+        arms = self.arms(problem)
+        return {
+            "format": "multiarm.schedule/1",
+            "makespan": self.makespan,
+            "tasks": [
+                {
+                    "task": problem.task_names[t],
+                    "arm": problem.arm_names[arms[t]],
+                    "start": float(self.start[t]),
+                    "end": float(self.end[t]),
+                    "waits": [
+                        [b, float(w)]
+                        for b, w in zip(
+                            problem.shapes[int(self.mode[t])].borders,
+                            self.waits[t].tolist(),
+                            strict=True,
+                        )
+                        if w > 0
+                    ],
+                    "blocking": float(self.blocking[t]),
+                }
+                for t in range(self.n_tasks)
+            ],
+        }
+
+    @classmethod
+    def from_dict(cls, problem: Problem, data: dict[str, Any]) -> Schedule:
+        """Inverse of :meth:`to_dict`."""
+        T = problem.n_tasks
+        idx = {n: i for i, n in enumerate(problem.task_names)}
+        arm_idx = {n: i for i, n in enumerate(problem.arm_names)}
+        mode = np.full(T, -1, dtype=np.int64)
+        start = np.zeros(T)
+        end = np.zeros(T)
+        blocking = np.zeros(T)
+        waits: list[FloatArray] = [np.zeros(0)] * T
+        for row in data["tasks"]:
+            t = idx[row["task"]]
+            m = int(problem.mode_of[arm_idx[row["arm"]], t])
+            if m < 0:
+                raise ValidationError(f"arm {row['arm']!r} cannot do task {row['task']!r}")
+            mode[t], start[t], end[t] = m, row["start"], row["end"]
+            blocking[t] = row.get("blocking", 0.0)
+            borders = problem.shapes[m].borders
+            w = np.zeros(len(borders))
+            for b, x in row.get("waits", []):
+                if b not in borders:
+                    raise ValidationError(f"task {row['task']!r}: {b} is not a border of its mode")
+                w[borders.index(b)] = x
+            waits[t] = w
+        if (mode < 0).any():
+            missing = problem.task_names[int(np.argmax(mode < 0))]
+            raise ValidationError(f"the schedule data lacks task {missing!r}")
+        return cls(mode, start, end, tuple(waits), blocking)
+
+    def to_dataframe(self, problem: Problem) -> Any:
+        """A pandas DataFrame, one row per task (needs the ``analysis`` extra)."""
+        import pandas as pd
+
+        d = self.to_dict(problem)["tasks"]
+        return pd.DataFrame(d)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Schedule):
+            return NotImplemented
+        return (
+            np.array_equal(self.mode, other.mode)
+            and np.array_equal(self.start, other.start)
+            and np.array_equal(self.end, other.end)
+            and np.array_equal(self.blocking, other.blocking)
+            and len(self.waits) == len(other.waits)
+            and all(np.array_equal(a, b) for a, b in zip(self.waits, other.waits, strict=True))
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+# --------------------------------------------------------------- validation
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.6g}"
+
+
+def parked_pose(
+    problem: Problem, schedule: Schedule, seqs: list[list[int]], arm: int, time: float
+) -> int | None:
+    """Where ``arm`` stands parked at ``time``: the task whose end pose it holds
+    (-1: its initial pose), or None when it is working or travelling."""
+    prev = -1
+    ready = 0.0
+    for t in seqs[arm]:
+        depart = float(schedule.start[t]) - problem.setup_time(arm, prev, t)
+        if time < depart:
+            return prev if time >= ready else None
+        if time < float(schedule.end[t]):
+            return None
+        prev = t
+        ready = float(schedule.end[t])
+    return prev
+
+
+def blocking_required(
+    problem: Problem,
+    schedule: Schedule,
+    task: int,
+    seqs: list[list[int]] | None = None,
+    cache: dict[tuple[int, int, int], float] | None = None,
+) -> tuple[float, list[tuple[int, int]]]:
+    """The detour cost the blocking oracle charges ``task`` in ``schedule``:
+    (total, [(parked arm, pose task), ...] that block it)."""
+    oracle = problem.blocking
+    if oracle is None:
+        return 0.0, []
+    if seqs is None:
+        seqs = schedule.sequences(problem)
+    m = int(schedule.mode[task])
+    a = int(problem.mode_arm[m])
+    S = float(schedule.start[task])
+    total = 0.0
+    who = []
+    for b in range(problem.n_arms):
+        if b == a:
+            continue
+        pose = parked_pose(problem, schedule, seqs, b, S)
+        if pose is None:
+            continue
+        key = (m, b, pose)
+        if cache is not None and key in cache:
+            c = cache[key]
+        else:
+            c = float(oracle.cost(m, b, pose))
+            if cache is not None:
+                cache[key] = c
+        if c != 0.0:
+            total += c
+            who.append((b, pose))
+    return total, who
+
+
+def validate(problem: Problem, schedule: Schedule, tol: float = 1e-6) -> float:
+    """Check every constraint of ``problem`` on ``schedule``; return the makespan.
+
+    Checks: one mode of the right task per task; finite times; ends equal
+    start + duration + waits + charged blocking; non-negative waits, one per
+    border; releases; arm availability and the setup before every task, in
+    each arm's start order; precedence; exclusive zones never held by two arms
+    at once (start zones included); never two arms moving in one shared zone;
+    tools held by one task at a time; blocking: every task charged at least
+    the detour its parked neighbours force, and none starting while a parked
+    arm is in its way for good. Intervals are half-open: touching is fine.
+
+    Parameters
+    ----------
+    tol : float
+        Absolute tolerance on times, seconds.
+
+    Returns
+    -------
+    float
+        The makespan (largest end), or 0 for a problem without tasks.
+
+    Raises
+    ------
+    ScheduleError
+        Naming the first violated constraint, its tasks, arms and times.
+    """
+    p = problem
+    T = p.n_tasks
+    s = schedule
+    if (
+        len(s.mode) != T
+        or len(s.start) != T
+        or len(s.end) != T
+        or len(s.waits) != T
+        or len(s.blocking) != T
+    ):
+        raise ScheduleError(f"the schedule covers {len(s.mode)} tasks, the problem has {T}")
+    names = p.task_names
+    for t in range(T):
+        m = int(s.mode[t])
+        if not (0 <= m < p.n_modes) or int(p.mode_task[m]) != t:
+            raise ScheduleError(
+                f"task {names[t]!r} is given mode {m}, which is not one of its modes"
+            )
+        if not (math.isfinite(s.start[t]) and math.isfinite(s.end[t])):
+            raise ScheduleError(f"task {names[t]!r} has a non-finite start or end")
+        sh = p.shapes[m]
+        w = s.waits[t]
+        if len(w) != len(sh.borders):
+            raise ScheduleError(
+                f"task {names[t]!r} gives {len(w)} waits for {len(sh.borders)} borders"
+            )
+        if len(w) and (not np.all(np.isfinite(w)) or np.any(w < -tol)):
+            raise ScheduleError(f"task {names[t]!r} has a negative or non-finite wait")
+        if not (math.isfinite(s.blocking[t]) and s.blocking[t] >= -tol):
+            raise ScheduleError(f"task {names[t]!r} has a negative or non-finite blocking cost")
+        expect = float(s.start[t]) + sh.length(w) + float(s.blocking[t])
+        if abs(float(s.end[t]) - expect) > tol:
+            raise ScheduleError(
+                f"task {names[t]!r} ends at {_fmt(s.end[t])}, but start + duration + waits + blocking "
+                f"= {_fmt(expect)}"
+            )
+        if s.start[t] < p.task_release[t] - tol:
+            raise ScheduleError(
+                f"task {names[t]!r} starts at {_fmt(s.start[t])} before its release {_fmt(p.task_release[t])}"
+            )
+        for q in p.task_preds[t]:
+            if s.start[t] < s.end[q] - tol:
+                raise ScheduleError(
+                    f"task {names[t]!r} starts at {_fmt(s.start[t])} before its predecessor "
+                    f"{names[q]!r} ends at {_fmt(s.end[q])}"
+                )
+    seqs = s.sequences(p)
+    for a, seq in enumerate(seqs):
+        prev, ready = -1, float(p.arm_available[a])
+        for t in seq:
+            need = ready + p.setup_time(a, prev, t)
+            if s.start[t] < need - tol:
+                what = "becomes available" if prev < 0 else f"finishes {names[prev]!r}"
+                raise ScheduleError(
+                    f"arm {p.arm_names[a]!r} starts task {names[t]!r} at {_fmt(s.start[t])}, but it "
+                    f"{what} and travels until {_fmt(need)}"
+                )
+            prev, ready = t, float(s.end[t])
+    # zones and tools
+    res = s.reservations(p)
+    groups: dict[tuple[str, str], list[Reservation]] = {}
+    for r in res:
+        if r.kind == "move" or r.kind == "tool":
+            groups.setdefault((r.kind, r.resource), []).append(r)
+        else:  # exclusive occupancy and start zones share the zone
+            groups.setdefault(("zone", r.resource), []).append(r)
+    for (kind, name), items in groups.items():
+        items.sort(key=lambda r: r.start)
+        for i, r1 in enumerate(items):
+            for r2 in items[i + 1 :]:
+                if r2.start >= r1.end - tol:
+                    break
+                if r2.arm == r1.arm or r2.end <= r2.start + tol or r1.end <= r1.start + tol:
+                    continue
+                what = {
+                    "zone": "inside exclusive zone",
+                    "move": "moving in shared zone",
+                    "tool": "holding tool",
+                }[kind]
+                who1 = f"task {r1.task!r}" if r1.task else "standing (start zone)"
+                who2 = f"task {r2.task!r}" if r2.task else "standing (start zone)"
+                raise ScheduleError(
+                    f"arms {r1.arm!r} ({who1}) and {r2.arm!r} ({who2}) are both {what} {name!r} "
+                    f"during [{_fmt(r2.start)}, {_fmt(min(r1.end, r2.end))})"
+                )
+    if p.blocking is not None:
+        cache: dict[tuple[int, int, int], float] = {}
+        for t in range(T):
+            need, who = blocking_required(p, s, t, seqs, cache)
+            if math.isinf(need):
+                b, pose = next(
+                    (b, pose) for b, pose in who if math.isinf(cache[(int(s.mode[t]), b, pose)])
+                )
+                where = "its initial pose" if pose < 0 else f"the end pose of {names[pose]!r}"
+                raise ScheduleError(
+                    f"task {names[t]!r} starts at {_fmt(s.start[t])} while arm {p.arm_names[b]!r} is "
+                    f"parked at {where}, in its way with no detour"
+                )
+            if s.blocking[t] < need - tol:
+                raise ScheduleError(
+                    f"task {names[t]!r} is charged {_fmt(s.blocking[t])} s of detour, but the arms parked "
+                    f"in its way force {_fmt(need)} s"
+                )
+    return float(s.end.max()) if T else 0.0

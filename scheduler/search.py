@@ -1,0 +1,515 @@
+"""Search building blocks shared by the solvers.
+
+A *solution* is a list (a topological order of the tasks) plus a mode per
+task; :class:`Evaluator` decodes it into a schedule with the placement
+kernel (earliest placement of each task in list order, arm gaps used, waits
+at zone borders where they help). With a blocking oracle, decoding is
+chronological (each task starts no earlier than the one before it in the
+list) and the oracle is asked, lazily and cached, about the arms parked at
+each start; the detour cost it charges is never less than what the final
+schedule needs, because an arm's future tasks all start later (see
+``docs/scheduler.md``).
+
+:func:`critical_path` explains a schedule's makespan: the chain of tasks
+each of which could not start earlier because of the one before it (a
+predecessor, the previous task on the arm, or a zone or tool it had to wait
+for). :func:`local_search` improves a solution with moves on that chain.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from multiarm.types import FloatArray, IntArray
+from scheduler.kernel import EPS, State, decode, to_schedule
+from scheduler.problem import Problem
+from scheduler.schedule import Schedule
+
+__all__ = [
+    "Evaluator",
+    "Solution",
+    "critical_path",
+    "local_search",
+    "priority_order",
+    "rank_upward",
+]
+
+
+@dataclass
+class Solution:
+    """A list and a mode per task, with the makespan it decodes to."""
+
+    order: IntArray
+    modes: IntArray
+    makespan: float
+    secondary: float = 0.0
+    state: State | None = None
+
+    def key(self) -> tuple[float, float]:
+        return (self.makespan, self.secondary)
+
+
+def rank_upward(problem: Problem) -> FloatArray:
+    """HEFT upward rank: mean mode duration plus the largest rank of a successor."""
+    p = problem
+    mean = np.zeros(p.n_tasks)
+    np.add.at(mean, p.mode_task, p.mode_duration)
+    mean /= np.maximum(np.bincount(p.mode_task, minlength=p.n_tasks), 1)
+    rank = mean.copy()
+    order = _topological(p)
+    for t in reversed(order):
+        best = 0.0
+        for s in p.task_succs[t]:
+            best = max(best, rank[s])
+        rank[t] = mean[t] + best
+    return rank
+
+
+def _topological(p: Problem) -> list[int]:
+    indeg = [len(ps) for ps in p.task_preds]
+    order = [t for t in range(p.n_tasks) if indeg[t] == 0]
+    i = 0
+    while i < len(order):
+        for s in p.task_succs[order[i]]:
+            indeg[s] -= 1
+            if indeg[s] == 0:
+                order.append(s)
+        i += 1
+    return order
+
+
+def priority_order(
+    problem: Problem,
+    key: FloatArray | None = None,
+    rng: np.random.Generator | None = None,
+    noise: float = 0.0,
+) -> IntArray:
+    """A topological list: among ready tasks, the largest ``key`` first (default:
+    the upward rank, i.e. HEFT), earlier release breaking ties. ``noise``
+    (relative, with ``rng``) perturbs the keys for randomized restarts."""
+    p = problem
+    k = rank_upward(p) if key is None else np.asarray(key, dtype=float)
+    if noise > 0 and rng is not None:
+        k = k * (1.0 + noise * rng.standard_normal(len(k)))
+    missing = [len(ps) for ps in p.task_preds]
+    heap = [(-k[t], p.task_release[t], t) for t in range(p.n_tasks) if missing[t] == 0]
+    heapq.heapify(heap)
+    out = []
+    while heap:
+        _, _, t = heapq.heappop(heap)
+        out.append(t)
+        for s in p.task_succs[t]:
+            missing[s] -= 1
+            if missing[s] == 0:
+                heapq.heappush(heap, (-k[s], p.task_release[s], s))
+    return np.array(out, dtype=np.int64)
+
+
+class Evaluator:
+    """Decodes solutions of one problem and counts the evaluations.
+
+    For re-solving, decoding can start from a ``base`` state (tasks already
+    done or running, committed), with overridden ``release`` times, a mask of
+    ``allowed`` modes (failed arms) and per-arm times ``arm_lb`` before which
+    an arm cannot start; ``frozen`` tasks are never moved by the search.
+    """
+
+    def __init__(
+        self,
+        problem: Problem,
+        *,
+        waits: bool = True,
+        chronological: bool | None = None,
+        base: State | None = None,
+        release: FloatArray | None = None,
+        allowed: np.ndarray | None = None,
+        arm_lb: FloatArray | None = None,
+        frozen: frozenset[int] = frozenset(),
+    ) -> None:
+        self.problem = problem
+        self.inst = problem.instance
+        self.waits = waits
+        self.blocking = problem.blocking is not None
+        self.chrono = self.blocking if chronological is None else (chronological or self.blocking)
+        self.evaluations = 0
+        self._oracle_cache: dict[tuple[int, int, int], float] = {}
+        self.base = base
+        self.release = release
+        self.allowed = allowed
+        self.arm_lb = arm_lb
+        self.frozen = frozen
+
+    # ---------------------------------------------------------- decoding
+    def decode(
+        self, order: IntArray, modes: IntArray | None = None, state: State | None = None
+    ) -> tuple[bool, State]:
+        """Place ``order`` (modes fixed where >= 0, else earliest-finishing).
+
+        Returns (complete, state): ``complete`` is False when some task could
+        not be placed (only possible with start zones held for good or a
+        parked arm in the way with no detour).
+        """
+        self.evaluations += 1
+        fixed = np.full(self.problem.n_tasks, -1, dtype=np.int64) if modes is None else modes
+        if state is None and self.base is not None:
+            state = self.base.copy()
+        if not self.blocking:
+            code, st = decode(
+                self.inst,
+                order,
+                fixed,
+                chrono=self.chrono,
+                waits=self.waits,
+                state=state,
+                release=self.release,
+                allowed=self.allowed,
+                arm_lb=self.arm_lb,
+            )
+            return code == 0, st
+        return self._decode_blocking(order, fixed, state)
+
+    def cost(self, st: State, m: int, S: float) -> float:
+        """Detour cost the oracle charges mode ``m`` starting at ``S`` in ``st``."""
+        p = self.problem
+        oracle = p.blocking
+        assert oracle is not None
+        a = int(p.mode_arm[m])
+        total = 0.0
+        inst = self.inst
+        for b in range(p.n_arms):
+            if b == a:
+                continue
+            n = int(st.arm_n[b])
+            if n == 0:
+                pose = -1
+            else:
+                last = int(st.arm_t[inst.arm_lo[b] + n - 1])
+                if st.t_end[last] > S + EPS:
+                    continue  # working (or travelling) at S
+                pose = last
+            key = (m, b, pose)
+            c = self._oracle_cache.get(key)
+            if c is None:
+                c = float(oracle.cost(m, b, pose))
+                if not (c >= 0.0):
+                    raise ValueError(
+                        f"blocking oracle returned {c} for mode {m}, arm {b}, pose {pose}"
+                    )
+                self._oracle_cache[key] = c
+            total += c
+        return total
+
+    def place_blocking(
+        self, st: State, t: int, m: int, S0: float
+    ) -> tuple[float, float, int, FloatArray, float]:
+        """Chronological placement with the oracle's detour cost: (S, end, slot, waits, cost)."""
+        c = 0.0
+        while True:
+            S, end, k, w = self.inst.query(
+                st, t, m, S0, chrono=True, waits=self.waits, extra=c, arm_lb=self.arm_lb
+            )
+            if not math.isfinite(S):
+                return math.inf, math.inf, -1, w, 0.0
+            c2 = self.cost(st, m, S)
+            if math.isinf(c2):
+                return math.inf, math.inf, -1, w, c2
+            if c2 <= c + 1e-12:
+                return S, end, k, w, c
+            c = c2  # a later start can only see more arms parked: c grows to a fixpoint
+
+    def _decode_blocking(
+        self, order: IntArray, fixed: IntArray, state: State | None
+    ) -> tuple[bool, State]:
+        """Chronological decoding with the oracle. A task that cannot start yet
+        (a predecessor to come, a zone held, a parked arm in its way for good)
+        is deferred and retried after the others, as the kernel does."""
+        p = self.problem
+        st = self.inst.new_state() if state is None else state
+        pending = order.tolist()
+        while pending:
+            kept = []
+            for t in pending:
+                if any(st.t_mode[q] < 0 for q in p.task_preds[t]):
+                    kept.append(t)
+                    continue
+                S0 = self.inst.earliest(st, t, True, self.release)
+                best = (math.inf, math.inf, 0)
+                choice = None
+                for m in p.task_modes[t]:
+                    if (fixed[t] >= 0 and m != fixed[t]) or (
+                        self.allowed is not None and not self.allowed[m]
+                    ):
+                        continue
+                    S, end, k, w, c = self.place_blocking(st, t, m, S0)
+                    if not math.isfinite(end):
+                        continue
+                    key = (end, float(w.sum()) + c, m)
+                    if key < best:
+                        best, choice = key, (m, S, end, k, w)
+                if choice is None:
+                    kept.append(t)
+                    continue
+                m, S, end, k, w = choice
+                self.inst.commit(st, t, m, S, end, k, w)
+            if len(kept) == len(pending):
+                return False, st
+            pending = kept
+        return True, st
+
+    def evaluate(self, order: IntArray, modes: IntArray | None = None) -> Solution | None:
+        """Decode and wrap as a :class:`Solution` (None if incomplete)."""
+        ok, st = self.decode(order, modes)
+        if not ok:
+            return None
+        return Solution(
+            order.copy(),
+            st.t_mode.copy(),
+            float(st.t_end.max()) if len(st.t_end) else 0.0,
+            float(st.t_end.sum()),
+            st,
+        )
+
+    def schedule(self, sol: Solution) -> Schedule:
+        """The schedule of a decoded solution."""
+        st = sol.state
+        if st is None:
+            ok, st = self.decode(sol.order, sol.modes)
+            assert ok
+        sched: Schedule = to_schedule(self.inst, st)
+        return sched
+
+
+# ------------------------------------------------------------ critical path
+
+
+def critical_path(
+    problem: Problem, sched: Schedule, rng: np.random.Generator | None = None, tol: float = 1e-6
+) -> list[tuple[int, str, int]]:
+    """The chain that explains the makespan, last task first.
+
+    Each entry is ``(task, reason, by)``: ``task`` could not start (or pass a
+    zone border) earlier because of ``by``, for ``reason`` ``"pred"``,
+    ``"arm"`` (previous task on the arm, with the travel), ``"resource"`` (a
+    zone or tool ``by`` held) — or ``"release"`` (``by = -1``) where the
+    chain starts.
+    """
+    p = problem
+    T = p.n_tasks
+    if T == 0:
+        return []
+    shapes = p.shapes
+    arms = sched.arms(p)
+    seqs = sched.sequences(p)
+    prev_on_arm = np.full(T, -1)
+    for seq in seqs:
+        for i in range(1, len(seq)):
+            prev_on_arm[seq[i]] = seq[i - 1]
+    # interval ends per resource: end time -> tasks ending there
+    ends: dict[int, dict[float, list[int]]] = {}
+    starts_of: list[list[tuple[int, float]]] = [[] for _ in range(T)]
+    for t in range(T):
+        sh = shapes[int(sched.mode[t])]
+        ivs = sh.intervals(float(sched.start[t]), sched.waits[t])
+        ivs += [(r, float(sched.start[t]), float(sched.end[t])) for r in sh.tools]
+        for r, s, e in ivs:
+            ends.setdefault(r, {}).setdefault(round(e, 6), []).append(t)
+            starts_of[t].append((r, s))
+
+    def reasons(t: int) -> list[tuple[str, int]]:
+        S = float(sched.start[t])
+        out: list[tuple[str, int]] = []
+        for q in p.task_preds[t]:
+            if abs(float(sched.end[q]) - S) <= tol:
+                out.append(("pred", q))
+        q = int(prev_on_arm[t])
+        if q >= 0 and abs(float(sched.end[q]) + p.setup_time(int(arms[t]), q, t) - S) <= tol:
+            out.append(("arm", q))
+        for r, s in starts_of[t]:
+            for x in ends.get(r, {}).get(round(s, 6), []):
+                if x != t and arms[x] != arms[t]:
+                    out.append(("resource", x))
+        return out
+
+    last = int(np.argmax(sched.end))
+    chain: list[tuple[int, str, int]] = []
+    seen = set()
+    t = last
+    while t not in seen:
+        seen.add(t)
+        rs = reasons(t)
+        if not rs:
+            chain.append((t, "release", -1))
+            break
+        pick = rs[int(rng.integers(len(rs)))] if rng is not None and len(rs) > 1 else rs[0]
+        chain.append((t, pick[0], pick[1]))
+        t = pick[1]
+    return chain
+
+
+# --------------------------------------------------------------- local search
+
+
+def _move_before(
+    order: IntArray, pos: IntArray, t: int, x: int, preds: tuple[tuple[int, ...], ...]
+) -> IntArray | None:
+    """``order`` with ``t`` moved just before ``x`` (None if that breaks precedence)."""
+    i, j = int(pos[t]), int(pos[x])
+    if i <= j:
+        return None
+    for q in preds[t]:
+        if pos[q] >= j:
+            return None
+    out = np.empty_like(order)
+    out[:j] = order[:j]
+    out[j] = t
+    out[j + 1 : i + 1] = order[j:i]
+    out[i + 1 :] = order[i + 1 :]
+    return out
+
+
+def _move_after(
+    order: IntArray, pos: IntArray, x: int, t: int, succs: tuple[tuple[int, ...], ...]
+) -> IntArray | None:
+    """``order`` with ``x`` moved just after ``t`` (None if that breaks precedence)."""
+    j, i = int(pos[x]), int(pos[t])
+    if j >= i:
+        return None
+    for s in succs[x]:
+        if pos[s] <= i:
+            return None
+    out = np.empty_like(order)
+    out[:j] = order[:j]
+    out[j:i] = order[j + 1 : i + 1]
+    out[i] = x
+    out[i + 1 :] = order[i + 1 :]
+    return out
+
+
+def neighbours(
+    ev: Evaluator, sol: Solution, sched: Schedule, rng: np.random.Generator
+) -> list[tuple[IntArray, IntArray]]:
+    """Candidate moves around the critical path of ``sched``, shuffled
+    (frozen tasks and disallowed modes left alone)."""
+    p = ev.problem
+    frozen = ev.frozen
+    allowed = ev.allowed
+    chain = critical_path(p, sched, rng)
+    pos = np.full(p.n_tasks, -1, dtype=np.int64)
+    pos[sol.order] = np.arange(len(sol.order))
+    moves: list[tuple[IntArray, IntArray]] = []
+
+    def ok_mode(m: int) -> bool:
+        return allowed is None or bool(allowed[m])
+
+    for t, reason, by in chain:
+        if t in frozen:
+            continue
+        for m in p.task_modes[t]:
+            if m != sol.modes[t] and ok_mode(m):
+                modes = sol.modes.copy()
+                modes[t] = m
+                moves.append((sol.order, modes))
+        if reason in ("arm", "resource") and by >= 0 and by not in frozen:
+            o = _move_before(sol.order, pos, t, by, p.task_preds)
+            if o is not None:
+                moves.append((o, sol.modes))
+            o = _move_after(sol.order, pos, by, t, p.task_succs)
+            if o is not None:
+                moves.append((o, sol.modes))
+            if reason == "resource":
+                # or let the blocker go elsewhere
+                for m in p.task_modes[by]:
+                    if m != sol.modes[by] and ok_mode(m):
+                        modes = sol.modes.copy()
+                        modes[by] = m
+                        moves.append((sol.order, modes))
+    idx = rng.permutation(len(moves))
+    return [moves[i] for i in idx]
+
+
+def perturb(
+    ev: Evaluator, sol: Solution, rng: np.random.Generator, strength: int
+) -> tuple[IntArray, IntArray]:
+    """A random kick: ``strength`` random mode changes and list swaps that keep precedence."""
+    p = ev.problem
+    order = sol.order.copy()
+    modes = sol.modes.copy()
+    for _ in range(strength):
+        if rng.random() < 0.5:
+            t = int(order[int(rng.integers(len(order)))]) if len(order) else 0
+            ms = [m for m in p.task_modes[t] if ev.allowed is None or ev.allowed[m]]
+            if len(ms) > 1 and t not in ev.frozen:
+                modes[t] = ms[int(rng.integers(len(ms)))]
+        else:
+            i = int(rng.integers(max(len(order) - 1, 1)))
+            if i + 1 < len(order):
+                a, b = int(order[i]), int(order[i + 1])
+                if a not in p.task_preds[b]:
+                    order[i], order[i + 1] = b, a
+    return order, modes
+
+
+def local_search(
+    ev: Evaluator,
+    start: Solution,
+    deadline: float,
+    rng: np.random.Generator,
+    *,
+    on_improve: Callable[[Solution], None] | None = None,
+    lower: float = 0.0,
+    max_no_improve: int = 200,
+    max_evaluations: int | None = None,
+) -> Solution:
+    """Iterated local search on the critical path until ``deadline``.
+
+    First improvement over shuffled critical-path moves (re-assign a critical
+    task or the task that held it up; move a task before the one that held
+    it up, or that one after it). Equal makespan with a smaller sum of ends
+    is accepted too. At a local optimum, the best solution is kicked with a
+    few random moves (strength grows while nothing improves). Stops at
+    ``deadline`` or after ``max_evaluations`` decodes (a work limit makes the
+    result depend on the seed only).
+    """
+    best = cur = start
+    stall = 0
+    strength = 2
+    limit = math.inf if max_evaluations is None else ev.evaluations + max_evaluations
+
+    def out_of_budget() -> bool:
+        return time.perf_counter() >= deadline or ev.evaluations >= limit
+
+    while not out_of_budget() and best.makespan > lower + 1e-9:
+        sched = ev.schedule(cur)
+        improved = False
+        for order, modes in neighbours(ev, cur, sched, rng):
+            if out_of_budget():
+                break
+            cand = ev.evaluate(order, modes)
+            if cand is None:
+                continue
+            if cand.key() < cur.key():
+                cur = cand
+                improved = True
+                break
+        if cur.key() < best.key():
+            best = cur
+            stall = 0
+            strength = 2
+            if on_improve is not None:
+                on_improve(best)
+        elif not improved:
+            stall += 1
+            if stall > max_no_improve:
+                break
+            strength = min(strength + 1, 2 + ev.problem.n_tasks // 10)
+            order, modes = perturb(ev, best, rng, strength)
+            kicked = ev.evaluate(order, modes)
+            if kicked is not None:
+                cur = kicked
+    return best

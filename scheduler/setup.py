@@ -1,0 +1,284 @@
+"""Sequence-dependent setup (travel) times between an arm's tasks.
+
+Travel from one task's end pose to the next task's start pose on the same arm
+is a setup time that depends on the pair (DESIGN.md data flow, step 2). A
+:class:`Setup` describes it; the problem *binds* it (:meth:`Setup.bind`) into
+a :class:`BoundSetup` that answers ``time(arm, prev, next)`` and whole rows
+``row(arm, prev)`` (every next task at once, cached), ``prev = -1`` meaning
+the arm's initial pose.
+
+* :class:`NoSetup`: zero everywhere (FJSP).
+* :class:`MatrixSetup`: a dense ``(A, T + 1, T)`` array (row 0 = from the
+  initial pose).
+* :class:`TravelSetup`: distances between mode end and start points divided
+  by the arm's speed, plus a fixed time per move — computed on demand.
+* :class:`FunctionSetup`: any Python callable, cached per row.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from multiarm.errors import UsageError, ValidationError
+from multiarm.types import FloatArray
+
+if TYPE_CHECKING:
+    from scheduler.problem import Problem
+
+__all__ = [
+    "BoundSetup",
+    "FunctionSetup",
+    "MatrixSetup",
+    "NoSetup",
+    "Setup",
+    "TravelSetup",
+    "setup_from_dict",
+]
+
+
+class BoundSetup:
+    """Setup times bound to one problem, with a cache of rows."""
+
+    def __init__(
+        self,
+        problem: Problem,
+        row_fn: Callable[[int, int], FloatArray],
+        zero: bool = False,
+        cache_rows: int = 8192,
+    ) -> None:
+        self.problem = problem
+        self._row_fn = row_fn
+        self.zero = zero
+        self._zeros = np.zeros(problem.n_tasks)
+        self._zeros.setflags(write=False)
+        self._cache: OrderedDict[tuple[int, int], FloatArray] = OrderedDict()
+        self._limit = cache_rows
+
+    def row(self, arm: int, prev: int) -> FloatArray:
+        if self.zero:
+            return self._zeros
+        key = (arm, prev)
+        r = self._cache.get(key)
+        if r is None:
+            r = np.asarray(self._row_fn(arm, prev), dtype=float)
+            r.setflags(write=False)
+            self._cache[key] = r
+            if len(self._cache) > self._limit:
+                self._cache.popitem(last=False)
+        out: FloatArray = r
+        return out
+
+    def time(self, arm: int, prev: int, nxt: int) -> float:
+        if self.zero:
+            return 0.0
+        return float(self.row(arm, prev)[nxt])
+
+    def check(self) -> None:
+        """Validate every row the arms can use: finite and >= 0."""
+        p = self.problem
+        if self.zero:
+            return
+        for a in range(p.n_arms):
+            tasks = p.mode_task[p.mode_arm == a]
+            if len(tasks) == 0:
+                continue
+            for prev in (-1, *tasks.tolist()):
+                r = self.row(a, prev)[tasks]
+                bad = ~np.isfinite(r) | (r < 0)
+                if bad.any():
+                    t = int(tasks[np.argmax(bad)])
+                    src = "its initial pose" if prev < 0 else f"task {p.task_names[prev]!r}"
+                    raise ValidationError(
+                        f"setup time of arm {p.arm_names[a]!r} from {src} to task "
+                        f"{p.task_names[t]!r} must be finite and >= 0, got {float(r[np.argmax(bad)])}"
+                    )
+            if len(tasks) > 400:  # checking every row of big problems costs more than it saves
+                break
+
+    def is_metric(self, tol: float = 1e-9) -> bool:
+        """Whether ``setup(p, q) <= setup(p, r) + duration(r) + setup(r, q)`` for
+        every arm and task triple (initial pose included). Travel times obey
+        it; the exact search relies on it. O(A T^3): small problems only."""
+        p = self.problem
+        if self.zero:
+            return True
+        for a in range(p.n_arms):
+            modes = np.flatnonzero(p.mode_arm == a)
+            tasks = p.mode_task[modes]
+            n = len(tasks)
+            if n < 2:
+                continue
+            dur = p.mode_duration[modes]
+            S = np.array([self.row(a, int(q))[tasks] for q in tasks])  # S[i, j]: t_i -> t_j
+            init = self.row(a, -1)[tasks]
+            via = (
+                S[:, :, None] + dur[None, :, None] + S[None, :, :]
+            )  # via[i, k, j]: t_i -> t_k -> t_j
+            i, k, j = np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij")
+            distinct = (i != k) & (k != j) & (i != j)
+            if np.any((S[:, None, :] > via + tol) & distinct):
+                return False
+            via0 = init[:, None] + dur[:, None] + S  # via0[k, j]: home -> t_k -> t_j
+            if np.any((init[None, :] > via0 + tol) & ~np.eye(n, dtype=bool)):
+                return False
+        return True
+
+
+class Setup:
+    """Base class of setup-time models."""
+
+    def bind(self, problem: Problem) -> BoundSetup:
+        raise NotImplementedError
+
+    def to_dict(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+
+class NoSetup(Setup):
+    """No setup time (e.g. FJSP)."""
+
+    def bind(self, problem: Problem) -> BoundSetup:
+        return BoundSetup(problem, lambda a, p: np.zeros(problem.n_tasks), zero=True)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": "none"}
+
+
+class MatrixSetup(Setup):
+    """Setup times from a dense array ``times[arm, prev + 1, next]``, shape (A, T + 1, T)."""
+
+    def __init__(self, times: Any) -> None:
+        self.times = np.array(times, dtype=float)
+        if self.times.ndim != 3 or self.times.shape[1] != self.times.shape[2] + 1:
+            raise ValidationError(
+                f"setup matrix must have shape (A, T + 1, T), got {self.times.shape}"
+            )
+
+    def bind(self, problem: Problem) -> BoundSetup:
+        A, T = problem.n_arms, problem.n_tasks
+        if self.times.shape != (A, T + 1, T):
+            raise ValidationError(
+                f"setup matrix must have shape {(A, T + 1, T)}, got {self.times.shape}"
+            )
+        return BoundSetup(problem, lambda a, p: self.times[a, p + 1])
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": "matrix", "times": self.times.tolist()}
+
+
+class TravelSetup(Setup):
+    """Travel time = ``base[a] + distance(end of prev, start of next) / speed[a]``.
+
+    Parameters
+    ----------
+    start, end : (M, 3) float, metres
+        Where each mode starts and ends (tool point, cell frame).
+    home : (A, 3) float, metres
+        Each arm's initial pose (``prev = -1``).
+    speed : (A,) float, m/s
+    base : (A,) float, seconds
+        Fixed time of every move (acceleration, settling).
+    metric : {"euclidean", "manhattan"}
+        Straight-line (interpolated) or per-axis (Cartesian) travel (S1.9).
+    """
+
+    def __init__(
+        self,
+        start: Any,
+        end: Any,
+        home: Any,
+        speed: Any = 1.0,
+        base: Any = 0.0,
+        metric: Literal["euclidean", "manhattan"] = "euclidean",
+    ) -> None:
+        self.start = np.asarray(start, dtype=float)
+        self.end = np.asarray(end, dtype=float)
+        self.home = np.asarray(home, dtype=float)
+        self.speed = np.atleast_1d(np.asarray(speed, dtype=float))
+        self.base = np.atleast_1d(np.asarray(base, dtype=float))
+        if metric not in ("euclidean", "manhattan"):
+            raise ValidationError(f"metric must be 'euclidean' or 'manhattan', not {metric!r}")
+        self.metric = metric
+
+    def bind(self, problem: Problem) -> BoundSetup:
+        A, M = problem.n_arms, problem.n_modes
+        if self.start.shape != (M, 3) or self.end.shape != (M, 3):
+            raise ValidationError(f"travel setup needs (M, 3) = {(M, 3)} start and end points")
+        if self.home.shape != (A, 3):
+            raise ValidationError(f"travel setup needs (A, 3) = {(A, 3)} home points")
+        speed = np.broadcast_to(self.speed, (A,)) if self.speed.size in (1, A) else None
+        base = np.broadcast_to(self.base, (A,)) if self.base.size in (1, A) else None
+        if speed is None or base is None:
+            raise ValidationError("travel setup speed and base must be scalars or one per arm")
+        if np.any(~np.isfinite(speed) | (speed <= 0)):
+            raise ValidationError("travel setup speeds must be finite and > 0")
+        mode_of = problem.mode_of
+        order = 1 if self.metric == "manhattan" else 2
+
+        def row(a: int, prev: int) -> FloatArray:
+            src = self.home[a] if prev < 0 else self.end[mode_of[a, prev]]
+            modes = mode_of[a]
+            pts = self.start[np.where(modes >= 0, modes, 0)]
+            d = np.linalg.norm(pts - src, ord=order, axis=1)
+            out: FloatArray = base[a] + d / speed[a]
+            out[modes < 0] = math.inf
+            return out
+
+        return BoundSetup(problem, row)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "kind": "travel",
+            "start": self.start.tolist(),
+            "end": self.end.tolist(),
+            "home": self.home.tolist(),
+            "speed": self.speed.tolist(),
+            "base": self.base.tolist(),
+            "metric": self.metric,
+        }
+
+
+class FunctionSetup(Setup):
+    """Setup times from ``fn(arm, prev, next) -> float`` (``prev = -1``: initial pose),
+    computed on demand and cached a row at a time."""
+
+    def __init__(self, fn: Callable[[int, int, int], float]) -> None:
+        self.fn = fn
+
+    def bind(self, problem: Problem) -> BoundSetup:
+        mode_of = problem.mode_of
+
+        def row(a: int, prev: int) -> FloatArray:
+            out = np.full(problem.n_tasks, math.inf)
+            for t in np.flatnonzero(mode_of[a] >= 0):
+                out[t] = float(self.fn(a, prev, int(t)))
+            return out
+
+        return BoundSetup(problem, row)
+
+    def to_dict(self) -> dict[str, Any]:
+        raise UsageError("a FunctionSetup is code and cannot be written; use a MatrixSetup")
+
+
+def setup_from_dict(data: Mapping[str, Any]) -> Setup:
+    """Inverse of ``Setup.to_dict``."""
+    kind = data.get("kind")
+    if kind == "none":
+        return NoSetup()
+    if kind == "matrix":
+        return MatrixSetup(data["times"])
+    if kind == "travel":
+        return TravelSetup(
+            data["start"],
+            data["end"],
+            data["home"],
+            data["speed"],
+            data["base"],
+            data.get("metric", "euclidean"),
+        )
+    raise ValidationError(f"unknown setup kind {kind!r}")

@@ -1,0 +1,365 @@
+"""The tree search (default solver): beam, bounds, dominance, anytime, local search.
+
+The search tree's nodes are partial schedules; a child places one more ready
+task (all its predecessors placed) in one of its modes, at the earliest time
+the placement kernel finds — zone conflicts are resolved there and then by
+waiting at zone borders or delaying the task (S2.12: the waiting a window
+conflict forces is computed while the schedule is generated). Each child is
+scored by a valid lower bound on any completion of it::
+
+    max(makespan so far, end of the new task + its tail,
+        max over ready tasks r of earliest(r) + bottom level(r))
+
+with ties broken by the waiting and detour time it causes (an assignment that
+meets no resource or collision conflict is preferred), then by its end.
+
+One *pass* is a beam search of width ``w`` down to complete schedules:
+
+* **branch and bound**: children whose bound reaches the incumbent are cut;
+* **dominance**: among children with the same set of placed tasks, one
+  whose per-arm finish times and makespan are all no better than another's
+  is dropped (and exact duplicates are merged);
+* the ``w`` best survive to the next level.
+
+Anytime: passes with widths 1, 2, 4, ... alternate with iterated local search
+on the critical path (:func:`scheduler.search.local_search`) and randomized
+restarts until the time limit. On small problems (:mod:`scheduler.exact`)
+the search finishes with an exact branch and bound that proves optimality.
+A schedule whose makespan meets the global lower bound is optimal at once.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from multiarm.types import FloatArray, IntArray
+from scheduler import exact
+from scheduler.bounds import heads_and_tails, lower_bound
+from scheduler.kernel import State, expand
+from scheduler.problem import Problem
+from scheduler.result import Result, SearchStats, SolveStatus
+from scheduler.search import Evaluator, Solution, local_search, priority_order
+
+__all__ = ["TreeOptions", "beam_pass", "solve_tree"]
+
+
+@dataclass
+class TreeOptions:
+    """Knobs of the tree search (defaults suit problems up to a few thousand tasks)."""
+
+    max_width: int = 64
+    """Widest beam tried."""
+    beam_share: float = 0.35
+    """Share of the remaining time a beam pass may take."""
+    exact_max_tasks: int = 12
+    """Run the exact branch and bound on problems this small."""
+    restart_noise: float = 0.3
+    """Relative noise on priorities for randomized restarts."""
+    max_evaluations: int | None = None
+    """A work limit (decoded schedules): with it, and no time limit, the
+    result depends on the seed only. A wall-clock limit stops wherever the
+    machine got to."""
+    local_evaluations: int = 2000
+    """Decodes per local-search slice when running on a work limit."""
+    exact_max_nodes: int | None = None
+    """Node budget of the exact phase (default: none without a time limit,
+    ``100 * max_evaluations`` with a work limit)."""
+
+
+@dataclass
+class _Node:
+    state: State
+    missing: IntArray
+    order: list[int]
+    cmax: float
+    conflict: float
+    arm_end: FloatArray
+
+
+def _arm_end(st: State, inst, n_arms: int) -> FloatArray:  # type: ignore[no-untyped-def]
+    out = np.zeros(n_arms)
+    for a in range(n_arms):
+        n = int(st.arm_n[a])
+        if n:
+            out[a] = st.t_end[st.arm_t[inst.arm_lo[a] + n - 1]]
+    return out
+
+
+def beam_pass(
+    ev: Evaluator,
+    width: int,
+    deadline: float,
+    incumbent: float,
+    rng: np.random.Generator,
+    stats: SearchStats,
+) -> Solution | None:
+    """One beam search of ``width``; returns the best complete solution found
+    below ``incumbent`` (None if cut off by time or bounds)."""
+    p = ev.problem
+    inst = ev.inst
+    T = p.n_tasks
+    _, mind, tail = heads_and_tails(p)
+    bottom = mind + tail
+    root = _Node(
+        inst.new_state(),
+        np.array([len(ps) for ps in p.task_preds], dtype=np.int64),
+        [],
+        0.0,
+        0.0,
+        np.zeros(p.n_arms),
+    )
+    nodes = [root]
+    for _depth in range(T):
+        if time.perf_counter() > deadline:
+            return None
+        cands = []  # (bound, conflict, end, tiebreak, node index, t, m, S, k, waits, cost)
+        for ni, node in enumerate(nodes):
+            stats.nodes += 1
+            ready = np.flatnonzero(node.missing == 0)
+            if len(ready) == 0:
+                continue
+            # static part of the bound: every ready task must still run its bottom level
+            st = node.state
+            est = np.array([inst.earliest(st, int(r), ev.chrono) for r in ready])
+            vals = est + bottom[ready]
+            order_vals = np.argsort(-vals)
+            top1 = vals[order_vals[0]]
+            top2 = vals[order_vals[1]] if len(vals) > 1 else 0.0
+            ct, cm = [], []
+            for r in ready.tolist():
+                for m in p.task_modes[r]:
+                    ct.append(r)
+                    cm.append(m)
+            if ev.blocking:
+                res = []
+                for r, m in zip(ct, cm, strict=True):
+                    S, end, k, w, c = ev.place_blocking(st, r, m, inst.earliest(st, r, True))
+                    res.append((S, end, k, w, c))
+            else:
+                S_a, end_a, k_a, _w_a, waits_a = expand(
+                    inst, st, np.array(ct), np.array(cm), chrono=ev.chrono, waits=ev.waits
+                )
+                res = [(S_a[i], end_a[i], k_a[i], waits_a[i], 0.0) for i in range(len(ct))]
+            for i, (r, m) in enumerate(zip(ct, cm, strict=True)):
+                S, end, k, w, c = res[i]
+                if not math.isfinite(end):
+                    continue
+                rest = top2 if vals[order_vals[0]] == top1 and ready[order_vals[0]] == r else top1
+                bound = max(node.cmax, end + tail[r], rest)
+                if bound >= incumbent - 1e-9:
+                    stats.pruned += 1
+                    continue
+                conflict = node.conflict + float(np.sum(w)) + c
+                cands.append((bound, conflict, end, rng.random(), ni, r, m, S, k, w, c))
+        if not cands:
+            return None
+        cands.sort(key=lambda c: c[:4])
+        new_nodes: list[_Node] = []
+        groups: dict[bytes, list[_Node]] = {}
+        for _bound, conflict, end, _tb, ni, r, m, S, k, w, _c in cands:
+            if len(new_nodes) >= width:
+                break
+            parent = nodes[ni]
+            st2 = parent.state.copy()
+            inst.commit(st2, r, m, S, end, k, w[: len(p.shapes[m].borders)])
+            missing = parent.missing.copy()
+            missing[r] = -1
+            for s in p.task_succs[r]:
+                missing[s] -= 1
+            arm_end = parent.arm_end.copy()
+            a = int(p.mode_arm[m])
+            arm_end[a] = max(arm_end[a], end)
+            child = _Node(
+                st2, missing, [*parent.order, r], max(parent.cmax, end), conflict, arm_end
+            )
+            key = (missing < 0).tobytes()
+            group = groups.setdefault(key, [])
+            dominated = False
+            for other in group:
+                if (
+                    other.cmax <= child.cmax + 1e-9
+                    and np.all(other.arm_end <= child.arm_end + 1e-9)
+                    and other.conflict <= child.conflict + 1e-9
+                ):
+                    dominated = True
+                    break
+            if dominated:
+                stats.pruned += 1
+                continue
+            group.append(child)
+            new_nodes.append(child)
+        nodes = new_nodes
+        if not nodes:
+            return None
+    best = min(nodes, key=lambda n: (n.cmax, n.conflict))
+    st = best.state
+    return Solution(
+        np.array(best.order, dtype=np.int64),
+        st.t_mode.copy(),
+        float(st.t_end.max()),
+        float(st.t_end.sum()),
+        st,
+    )
+
+
+def solve_tree(
+    problem: Problem,
+    time_limit: float | None,
+    seed: int,
+    *,
+    waits: bool = True,
+    options: TreeOptions | None = None,
+    start: Solution | None = None,
+) -> Result:
+    """The anytime tree search (see the module docstring)."""
+    opt = options or TreeOptions()
+    t0 = time.perf_counter()
+    deadline = math.inf if time_limit is None else t0 + time_limit
+    rng = np.random.default_rng(seed)
+    stats = SearchStats()
+    p = problem
+    ev = Evaluator(p, waits=waits)
+    lb = lower_bound(p)
+    best: Solution | None = None
+
+    def offer(sol: Solution | None) -> None:
+        nonlocal best
+        if sol is not None and (best is None or sol.key() < best.key()):
+            improved = best is None or sol.makespan < best.makespan - 1e-9
+            best = sol
+            if improved:
+                stats.record(time.perf_counter() - t0, sol.makespan)
+
+    if p.n_tasks == 0:
+        return _finish(p, ev, None, lb, t0, seed, stats, proven=True)
+    # first schedule: the warm start, and the HEFT list
+    if start is not None:
+        offer(ev.evaluate(start.order, start.modes))
+    offer(ev.evaluate(priority_order(p)))
+    proven = False
+    can_prove, why = exact.applicable(p, opt.exact_max_tasks)
+    stats.extra["exact"] = "applicable" if can_prove else why
+    width = 1
+    restarts = 0
+    work_limit = opt.max_evaluations
+
+    def out_of_time() -> bool:
+        return time.perf_counter() >= deadline or (
+            work_limit is not None and ev.evaluations >= work_limit
+        )
+
+    while not out_of_time():
+        if best is not None and best.makespan <= lb + 1e-9:
+            proven = True
+            break
+        if can_prove and (time_limit is None or width > 4):
+            ph = time.perf_counter()
+            nodes = opt.exact_max_nodes
+            if nodes is None and work_limit is not None:
+                nodes = 100 * work_limit
+            res = exact.branch_and_bound(
+                p, best.makespan if best else math.inf, deadline, waits, nodes
+            )
+            stats.nodes += res.nodes
+            stats.pruned += res.pruned
+            stats.phases["exact"] = stats.phases.get("exact", 0.0) + time.perf_counter() - ph
+            if res.schedule is not None:
+                sched = res.schedule
+                sol = ev.evaluate(
+                    np.argsort(sched.start, kind="stable").astype(np.int64), sched.mode.copy()
+                )
+                if sol is not None and sol.makespan <= res.makespan + 1e-9:
+                    offer(sol)
+                else:
+                    stats.extra["exact_schedule"] = sched
+                    offer(
+                        Solution(
+                            np.argsort(sched.start, kind="stable").astype(np.int64),
+                            sched.mode.copy(),
+                            res.makespan,
+                            float(sched.end.sum()),
+                            None,
+                        )
+                    )
+            if res.complete:
+                proven = True
+                break
+            can_prove = False  # out of budget for the proof: go on with the heuristics
+            continue
+        now = time.perf_counter()
+        if width <= opt.max_width:
+            ph = now
+            budget = (deadline - now) * opt.beam_share if math.isfinite(deadline) else math.inf
+            sol = beam_pass(
+                ev, width, now + budget, best.makespan if best else math.inf, rng, stats
+            )
+            offer(sol)
+            stats.phases["beam"] = stats.phases.get("beam", 0.0) + time.perf_counter() - ph
+            width *= 2
+        # local improvement of the incumbent (or of a randomized restart)
+        ph = time.perf_counter()
+        if best is None or restarts % 3 == 2:
+            seed_sol = ev.evaluate(priority_order(p, rng=rng, noise=opt.restart_noise))
+        else:
+            seed_sol = best
+        restarts += 1
+        if seed_sol is not None:
+            slice_end = (
+                deadline
+                if not math.isfinite(deadline) or width > opt.max_width
+                else ph + (deadline - ph) * 0.5
+            )
+            evals = None
+            if work_limit is not None:
+                evals = min(opt.local_evaluations, max(1, work_limit - ev.evaluations))
+            elif not math.isfinite(slice_end):
+                evals = opt.local_evaluations
+            improved = local_search(
+                ev, seed_sol, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
+            )
+            offer(improved)
+        stats.phases["local"] = stats.phases.get("local", 0.0) + time.perf_counter() - ph
+        if (
+            time_limit is None
+            and work_limit is None
+            and not can_prove
+            and width > opt.max_width
+            and restarts > 12
+        ):
+            break  # unlimited budget on a big problem: stop after a fair effort
+    stats.evaluations = ev.evaluations
+    return _finish(p, ev, best, lb, t0, seed, stats, proven)
+
+
+def _finish(
+    p: Problem,
+    ev: Evaluator,
+    best: Solution | None,
+    lb: float,
+    t0: float,
+    seed: int,
+    stats: SearchStats,
+    proven: bool,
+) -> Result:
+    from scheduler.schedule import validate
+
+    runtime = time.perf_counter() - t0
+    if p.n_tasks == 0:
+        from scheduler.schedule import Schedule
+
+        empty = Schedule(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), (), np.zeros(0))
+        return Result(SolveStatus.OPTIMAL, empty, 0.0, 0.0, runtime, "tree", seed, stats)
+    if best is None:
+        status = SolveStatus.INFEASIBLE if proven else SolveStatus.UNKNOWN
+        return Result(status, None, math.inf, lb, runtime, "tree", seed, stats)
+    sched = stats.extra.pop("exact_schedule", None) if best.state is None else None
+    if sched is None:
+        sched = ev.schedule(best)
+    mk = validate(p, sched)
+    bound = mk if proven else min(lb, mk)
+    status = SolveStatus.OPTIMAL if proven or mk <= lb + 1e-9 else SolveStatus.FEASIBLE
+    return Result(status, sched, mk, bound, runtime, "tree", seed, stats)
