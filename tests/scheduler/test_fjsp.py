@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,13 @@ import pytest
 from multiarm.errors import FormatError
 from scheduler import lower_bound, lower_bounds, parse_fjsp, read_fjsp
 
-DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "fjsp"
+SHARED = Path(os.environ.get("MULTIARM_SHARED", Path(__file__).resolve().parents[3] / "shared"))
+DATA = SHARED / "data" / "fjsp"
+if not DATA.is_dir():  # fail loudly: these instances are the external check of the scheduler
+    raise RuntimeError(
+        f"FJSP data not found at {DATA}: the project expects ../shared beside it "
+        "(or MULTIARM_SHARED pointing at it)"
+    )
 # (jobs, machines, operations, alternatives per operation, best-known makespan), from
 # ../shared/data/fjsp/README.md
 TABLE = {
