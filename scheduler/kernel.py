@@ -751,6 +751,9 @@ class Instance:
                     if prev < 0 or p.mode_of[a, prev] >= 0:
                         dense[a, prev + 1] = np.where(p.mode_of[a] >= 0, p.setup_row(a, prev), 0.0)
             self.su_kind, self.su_dense = 1, dense
+        self.succ_ptr = np.zeros(T + 1, dtype=i64)
+        self.succ_ptr[1:] = np.cumsum([len(s) for s in p.task_succs])
+        self.succ_idx = np.array([x for s in p.task_succs for x in s], dtype=i64)
         self.no_lb = np.full(A, -INF)
         self.all_modes = np.ones(M, dtype=np.bool_)
         self.scratch_w = np.zeros(max(self.max_borders, 1))
@@ -1413,3 +1416,351 @@ def to_schedule(inst: Instance, st: State) -> Any:
         if blocking[t] <= 1e-12 * max(1.0, abs(float(st.t_end[t]))):
             blocking[t] = 0.0
     return Schedule(st.t_mode.copy(), st.t_start.copy(), st.t_end.copy(), tuple(waits), blocking)
+
+
+# -------------------------------------------------- sequence decoding
+
+
+@njit(cache=True)
+def _heap_push(keys, vals, size, key, val):
+    i = size
+    keys[i] = key
+    vals[i] = val
+    while i > 0:
+        parent = (i - 1) // 2
+        if keys[parent] < keys[i] or (keys[parent] == keys[i] and vals[parent] <= vals[i]):
+            break
+        keys[parent], keys[i] = keys[i], keys[parent]
+        vals[parent], vals[i] = vals[i], vals[parent]
+        i = parent
+    return size + 1
+
+
+@njit(cache=True)
+def _heap_pop(keys, vals, size):
+    val = vals[0]
+    size -= 1
+    keys[0] = keys[size]
+    vals[0] = vals[size]
+    i = 0
+    while True:
+        lft = 2 * i + 1
+        rgt = lft + 1
+        small = i
+        if lft < size and (
+            keys[lft] < keys[small] or (keys[lft] == keys[small] and vals[lft] < vals[small])
+        ):
+            small = lft
+        if rgt < size and (
+            keys[rgt] < keys[small] or (keys[rgt] == keys[small] and vals[rgt] < vals[small])
+        ):
+            small = rgt
+        if small == i:
+            break
+        keys[small], keys[i] = keys[i], keys[small]
+        vals[small], vals[i] = vals[i], vals[small]
+        i = small
+    return val, size
+
+
+@njit(cache=True)
+def _seq_decode(
+    seq,
+    seq_n,
+    modes,
+    use_waits,
+    release,
+    pred_ptr,
+    pred_idx,
+    succ_ptr,
+    succ_idx,
+    mode_arm,
+    mode_dur,
+    rp_ptr,
+    rp_res,
+    rp_s,
+    rp_e,
+    seg_ptr,
+    seg_len,
+    segp_ptr,
+    sp_res,
+    sp_s,
+    sp_e,
+    stand_ptr,
+    st_res,
+    st_origin,
+    tool_ptr,
+    tool_res,
+    avail,
+    arm_lb,
+    ex_ptr,
+    ex_res,
+    ex_s,
+    ex_e,
+    ex_move,
+    bd_ptr,
+    bd_val,
+    start_ptr,
+    start_res,
+    su_kind,
+    su_dense,
+    mode_of,
+    su_start,
+    su_end,
+    su_home,
+    su_speed,
+    su_base,
+    su_order,
+    tl_s,
+    tl_e,
+    tl_own,
+    res_lo,
+    res_n,
+    arm_t,
+    arm_lo,
+    arm_n,
+    t_start,
+    t_end,
+    t_mode,
+    t_last,
+    t_waits,
+    waits_out,
+    taus,
+    best_w,
+    order_out,
+):
+    """Decode fixed arm sequences ``seq[a, :seq_n[a]]`` with fixed ``modes``:
+    tasks whose predecessors and previous task on the arm are placed go in
+    order of earliest possible start, each at its earliest feasible time
+    after its arm's previous task (zones, tools, waits as in ``_query``).
+    Returns the number of tasks placed (fewer than T: the sequences contradict
+    the precedence, or a start zone is held for good)."""
+    T = len(release)
+    A = seq.shape[0]
+    nbmax = t_waits.shape[1]
+    pos = np.zeros(T, dtype=np.int64)
+    indeg = np.zeros(T, dtype=np.int64)
+    for t in range(T):
+        for q in range(pred_ptr[t], pred_ptr[t + 1]):
+            if t_mode[pred_idx[q]] < 0:  # tasks of a base state are already placed
+                indeg[t] += 1
+    for a in range(A):
+        for i in range(seq_n[a]):
+            t = seq[a, i]
+            pos[t] = i
+            if i > 0:
+                indeg[t] += 1
+    keys = np.empty(T)
+    vals = np.empty(T, dtype=np.int64)
+    size = 0
+    for t in range(T):
+        if indeg[t] == 0 and t_mode[t] < 0:
+            a = mode_arm[modes[t]]
+            est = max(release[t], avail[a], arm_lb[a])
+            size = _heap_push(keys, vals, size, est, t)
+    placed = 0
+    while size > 0:
+        t, size = _heap_pop(keys, vals, size)
+        m = modes[t]
+        a = mode_arm[m]
+        S0 = _earliest(t, False, release, pred_ptr, pred_idx, t_end, t_last)
+        S, end, k = _query(
+            t,
+            m,
+            S0,
+            True,
+            use_waits,
+            0.0,
+            mode_arm,
+            mode_dur,
+            rp_ptr,
+            rp_res,
+            rp_s,
+            rp_e,
+            seg_ptr,
+            seg_len,
+            segp_ptr,
+            sp_res,
+            sp_s,
+            sp_e,
+            stand_ptr,
+            st_res,
+            st_origin,
+            tool_ptr,
+            tool_res,
+            avail,
+            arm_lb,
+            su_kind,
+            su_dense,
+            mode_of,
+            su_start,
+            su_end,
+            su_home,
+            su_speed,
+            su_base,
+            su_order,
+            tl_s,
+            tl_e,
+            tl_own,
+            res_lo,
+            res_n,
+            arm_t,
+            arm_lo,
+            arm_n,
+            t_start,
+            t_end,
+            waits_out,
+            taus,
+        )
+        if not (end < INF):
+            return placed
+        nb = bd_ptr[m + 1] - bd_ptr[m]
+        for j in range(nbmax):
+            best_w[j] = waits_out[j] if (use_waits and j < nb) else 0.0
+            t_waits[t, j] = best_w[j]
+        _commit(
+            t,
+            m,
+            S,
+            end,
+            k,
+            best_w,
+            mode_arm,
+            ex_ptr,
+            ex_res,
+            ex_s,
+            ex_e,
+            ex_move,
+            bd_ptr,
+            bd_val,
+            tool_ptr,
+            tool_res,
+            start_ptr,
+            start_res,
+            su_kind,
+            su_dense,
+            mode_of,
+            su_start,
+            su_end,
+            su_home,
+            su_speed,
+            su_base,
+            su_order,
+            tl_s,
+            tl_e,
+            tl_own,
+            res_lo,
+            res_n,
+            arm_t,
+            arm_lo,
+            arm_n,
+            t_start,
+            t_end,
+            t_mode,
+            t_last,
+        )
+        order_out[placed] = t
+        placed += 1
+        for q in range(succ_ptr[t], succ_ptr[t + 1]):
+            s = succ_idx[q]
+            indeg[s] -= 1
+            if indeg[s] == 0:
+                sa = mode_arm[modes[s]]
+                est = max(release[s], avail[sa], arm_lb[sa])
+                for r in range(pred_ptr[s], pred_ptr[s + 1]):
+                    if t_end[pred_idx[r]] > est:
+                        est = t_end[pred_idx[r]]
+                if pos[s] > 0:
+                    prv = seq[sa, pos[s] - 1]
+                    if t_end[prv] > est:
+                        est = t_end[prv]
+                size = _heap_push(keys, vals, size, est, s)
+        i = pos[t] + 1
+        if i < seq_n[a]:
+            s = seq[a, i]
+            indeg[s] -= 1
+            if indeg[s] == 0:
+                est = max(release[s], t_end[t])
+                for r in range(pred_ptr[s], pred_ptr[s + 1]):
+                    if t_end[pred_idx[r]] > est:
+                        est = t_end[pred_idx[r]]
+                size = _heap_push(keys, vals, size, est, s)
+    return placed
+
+
+def seq_decode(
+    inst: Instance,
+    seq: IntArray,
+    seq_n: IntArray,
+    modes: IntArray,
+    *,
+    waits: bool = True,
+    state: State | None = None,
+    release: FloatArray | None = None,
+    arm_lb: FloatArray | None = None,
+) -> tuple[bool, State, IntArray]:
+    """Decode arm sequences (see :func:`_seq_decode`) on top of ``state``:
+    (complete, state, processing order of the newly placed tasks)."""
+    st = inst.new_state() if state is None else state
+    T = inst.problem.n_tasks
+    todo = int((st.t_mode < 0).sum())
+    succ = inst.succ_ptr, inst.succ_idx
+    order = np.full(T, -1, dtype=np.int64)
+    best_w = np.zeros(max(inst.max_borders, 1))
+    placed = _seq_decode(
+        seq,
+        seq_n,
+        modes,
+        waits,
+        inst.release if release is None else release,
+        inst.pred_ptr,
+        inst.pred_idx,
+        *succ,
+        inst.mode_arm,
+        inst.mode_dur,
+        inst.rp_ptr,
+        inst.rp_res,
+        inst.rp_s,
+        inst.rp_e,
+        inst.seg_ptr,
+        inst.seg_len,
+        inst.segp_ptr,
+        inst.sp_res,
+        inst.sp_s,
+        inst.sp_e,
+        inst.stand_ptr,
+        inst.st_res,
+        inst.st_origin,
+        inst.tool_ptr,
+        inst.tool_res,
+        inst.avail,
+        inst.no_lb if arm_lb is None else arm_lb,
+        inst.ex_ptr,
+        inst.ex_res,
+        inst.ex_s,
+        inst.ex_e,
+        inst.ex_move,
+        inst.bd_ptr,
+        inst.bd_val,
+        inst.start_ptr,
+        inst.start_res,
+        *inst._setup_args(),
+        st.tl_s,
+        st.tl_e,
+        st.tl_own,
+        inst.res_lo,
+        st.res_n,
+        st.arm_t,
+        inst.arm_lo,
+        st.arm_n,
+        st.t_start,
+        st.t_end,
+        st.t_mode,
+        st.t_last,
+        st.t_waits,
+        inst.scratch_w,
+        inst.scratch_tau,
+        best_w,
+        order,
+    )
+    return placed == todo, st, order[:placed]

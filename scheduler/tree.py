@@ -21,9 +21,10 @@ One *pass* is a beam search of width ``w`` down to complete schedules:
   is dropped (and exact duplicates are merged);
 * the ``w`` best survive to the next level.
 
-Anytime: passes with widths 1, 2, 4, ... alternate with iterated local search
-on the critical path (:func:`scheduler.search.local_search`) and randomized
-restarts until the time limit. On small problems (:mod:`scheduler.exact`)
+Anytime: passes with widths 1, 2, 4, ... alternate with improvement of the
+best schedule until the time limit — a tabu search on the arms' task
+sequences (:mod:`scheduler.tabu`), or, with a blocking oracle, an iterated
+local search on the list (:func:`scheduler.search.local_search`). On small problems (:mod:`scheduler.exact`)
 the search finishes with an exact branch and bound that proves optimality.
 A schedule whose makespan meets the global lower bound is optimal at once.
 """
@@ -43,6 +44,7 @@ from scheduler.kernel import State, expand
 from scheduler.problem import Problem
 from scheduler.result import Result, SearchStats, SolveStatus
 from scheduler.search import Evaluator, Solution, local_search, priority_order
+from scheduler.tabu import tabu_search
 
 __all__ = ["TreeOptions", "beam_pass", "solve_tree"]
 
@@ -53,8 +55,10 @@ class TreeOptions:
 
     max_width: int = 64
     """Widest beam tried."""
-    beam_share: float = 0.35
+    beam_share: float = 0.1
     """Share of the remaining time a beam pass may take."""
+    improve_share: float = 0.5
+    """Share of the remaining time an improvement slice takes while beams remain."""
     exact_max_tasks: int = 12
     """Run the exact branch and bound on problems this small."""
     restart_noise: float = 0.3
@@ -244,7 +248,7 @@ def solve_tree(
     can_prove, why = exact.applicable(p, opt.exact_max_tasks)
     stats.extra["exact"] = "applicable" if can_prove else why
     width = 1
-    restarts = 0
+    rounds = 0
     work_limit = opt.max_evaluations
 
     def out_of_time() -> bool:
@@ -256,7 +260,7 @@ def solve_tree(
         if best is not None and best.makespan <= lb + 1e-9:
             proven = True
             break
-        if can_prove and (time_limit is None or width > 4):
+        if can_prove and (time_limit is None or rounds >= 2):
             ph = time.perf_counter()
             nodes = opt.exact_max_nodes
             if nodes is None and work_limit is not None:
@@ -269,20 +273,15 @@ def solve_tree(
             stats.phases["exact"] = stats.phases.get("exact", 0.0) + time.perf_counter() - ph
             if res.schedule is not None:
                 sched = res.schedule
-                sol = ev.evaluate(
-                    np.argsort(sched.start, kind="stable").astype(np.int64), sched.mode.copy()
-                )
+                order = np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64)
+                sol = ev.evaluate(order, sched.mode.copy())
                 if sol is not None and sol.makespan <= res.makespan + 1e-9:
                     offer(sol)
-                else:
+                else:  # the decoder cannot reproduce it: keep the exact schedule itself
                     stats.extra["exact_schedule"] = sched
                     offer(
                         Solution(
-                            np.argsort(sched.start, kind="stable").astype(np.int64),
-                            sched.mode.copy(),
-                            res.makespan,
-                            float(sched.end.sum()),
-                            None,
+                            order, sched.mode.copy(), res.makespan, float(sched.end.sum()), None
                         )
                     )
             if res.complete:
@@ -290,45 +289,46 @@ def solve_tree(
                 break
             can_prove = False  # out of budget for the proof: go on with the heuristics
             continue
-        now = time.perf_counter()
+        rounds += 1
+        # a beam pass (widths 1, 2, 4, ...): new starting points
         if width <= opt.max_width:
-            ph = now
-            budget = (deadline - now) * opt.beam_share if math.isfinite(deadline) else math.inf
-            sol = beam_pass(
-                ev, width, now + budget, best.makespan if best else math.inf, rng, stats
+            ph = time.perf_counter()
+            budget = (deadline - ph) * opt.beam_share if math.isfinite(deadline) else math.inf
+            offer(
+                beam_pass(ev, width, ph + budget, best.makespan if best else math.inf, rng, stats)
             )
-            offer(sol)
             stats.phases["beam"] = stats.phases.get("beam", 0.0) + time.perf_counter() - ph
             width *= 2
-        # local improvement of the incumbent (or of a randomized restart)
+        if best is None:
+            offer(ev.evaluate(priority_order(p, rng=rng, noise=opt.restart_noise)))
+            if best is None:
+                continue
+        # improvement: tabu search on arm sequences (list local search with a blocking oracle)
         ph = time.perf_counter()
-        if best is None or restarts % 3 == 2:
-            seed_sol = ev.evaluate(priority_order(p, rng=rng, noise=opt.restart_noise))
-        else:
-            seed_sol = best
-        restarts += 1
-        if seed_sol is not None:
-            slice_end = (
-                deadline
-                if not math.isfinite(deadline) or width > opt.max_width
-                else ph + (deadline - ph) * 0.5
-            )
-            evals = None
-            if work_limit is not None:
-                evals = min(opt.local_evaluations, max(1, work_limit - ev.evaluations))
-            elif not math.isfinite(slice_end):
-                evals = opt.local_evaluations
+        slice_end = deadline
+        if math.isfinite(deadline) and width <= opt.max_width:
+            slice_end = ph + (deadline - ph) * opt.improve_share
+        evals = None
+        if work_limit is not None:
+            evals = min(opt.local_evaluations, max(1, work_limit - ev.evaluations))
+        elif not math.isfinite(deadline):
+            evals = opt.local_evaluations
+        if ev.blocking or best.state is None:
             improved = local_search(
-                ev, seed_sol, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
+                ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
             )
-            offer(improved)
-        stats.phases["local"] = stats.phases.get("local", 0.0) + time.perf_counter() - ph
+        else:
+            improved = tabu_search(
+                ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
+            )
+        offer(improved)
+        stats.phases["improve"] = stats.phases.get("improve", 0.0) + time.perf_counter() - ph
         if (
             time_limit is None
             and work_limit is None
             and not can_prove
             and width > opt.max_width
-            and restarts > 12
+            and rounds > 12
         ):
             break  # unlimited budget on a big problem: stop after a fair effort
     stats.evaluations = ev.evaluations

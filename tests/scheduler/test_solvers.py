@@ -245,7 +245,8 @@ def test_time_limit_is_a_status_not_an_error() -> None:
 
     p = read_fjsp(path_of("mk10"))  # open for decades: no solver closes it in half a second
     r = solve(p, "tree", time_limit=0.5)
-    assert r.status.value == "feasible" and r.runtime < 2.0
+    # the limit ends in a status, not an exception (no timing claim: machines are shared)
+    assert r.status.value == "feasible" and r.schedule is not None and r.runtime < 30
     assert r.stats.first_time <= r.stats.best_time <= r.runtime
 
 
