@@ -101,11 +101,11 @@ def manager_requests(n_ops: int, seed: int) -> list[dict[str, object]]:
     return rows
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--quick", action="store_true", help="smaller sizes (smoke run)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     points = 2_000 if args.quick else 200_000
     ops = 2_000 if args.quick else 100_000
     q = point_queries(points, args.seed)

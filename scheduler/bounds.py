@@ -65,15 +65,7 @@ def _min_incoming_setup(p: Problem) -> FloatArray:
         modes = np.flatnonzero(p.mode_arm == a)
         if len(modes) == 0:
             continue
-        tasks = p.mode_task[modes]
-        best = p.setup_row(a, -1)[tasks].copy()
-        if len(tasks) <= 3000:
-            for prev in tasks:
-                row = p.setup_row(a, int(prev))[tasks].copy()
-                row[tasks == prev] = np.inf
-                np.minimum(best, row, out=best)
-        else:  # too many rows to scan: the initial-pose row is not a bound then
-            best[:] = 0.0
+        best = p._setup.min_incoming(a)[p.mode_task[modes]]
         out[modes] = np.where(np.isfinite(best), best, 0.0)
     return out
 

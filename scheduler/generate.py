@@ -111,7 +111,9 @@ def random_problem(
         )
     task_xy = rng.integers(0, grid + 1, size=(n_tasks, 2))
     home_xy = rng.integers(0, grid + 1, size=(n_arms, 2))
-    span = max(10, n_tasks * 2)
+    # releases spread over about half the expected load of an arm, so that the
+    # arms' work, not the last arrival, decides the makespan
+    span = max(10, int(0.5 * n_tasks * 8 / max(1, n_arms)))
     for t in range(n_tasks):
         preds = [
             q

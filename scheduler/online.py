@@ -62,7 +62,9 @@ class CellState:
         Finished tasks and tasks running now (with the end expected); kept
         exactly. ``mode`` is the mode id (``problem.mode_of[arm, task]``).
     releases : mapping task -> float
-        New release times (e.g. the expected arrival of a late part).
+        New release times of late parts (their expected arrival). They only
+        postpone: a task keeps the problem's release if that is later (to
+        use an early arrival, rebuild the problem with the new release).
     failed_arms : set of arms
         Arms that take no new task.
     arm_busy_until : mapping arm -> float
@@ -147,7 +149,8 @@ def reschedule(
                 )
     release = np.maximum(np.asarray(p.task_release, dtype=float), now)
     for ref, r in state.releases.items():
-        release[_task(p, ref)] = max(float(r), now)
+        t = _task(p, ref)
+        release[t] = max(release[t], float(r))  # a late part postpones; it never advances a task
     allowed = np.ones(p.n_modes, dtype=np.bool_)
     for ref in state.failed_arms:
         allowed[p.mode_arm == _arm(p, ref)] = False

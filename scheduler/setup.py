@@ -50,6 +50,7 @@ class BoundSetup:
         row_fn: Callable[[int, int], FloatArray],
         zero: bool = False,
         cache_rows: int = 8192,
+        min_in_fn: Callable[[int], FloatArray] | None = None,
     ) -> None:
         self.problem = problem
         self._row_fn = row_fn
@@ -58,6 +59,24 @@ class BoundSetup:
         self._zeros.setflags(write=False)
         self._cache: OrderedDict[tuple[int, int], FloatArray] = OrderedDict()
         self._limit = cache_rows
+        self._min_in_fn = min_in_fn
+
+    def min_incoming(self, arm: int) -> FloatArray:
+        """(T,): for each task, the least setup of ``arm`` into it from its
+        initial pose or from any other task it can do (inf where it cannot)."""
+        p = self.problem
+        if self.zero:
+            return np.zeros(p.n_tasks)
+        if self._min_in_fn is not None:
+            return self._min_in_fn(arm)
+        tasks = np.flatnonzero(p.mode_of[arm] >= 0)
+        best = np.full(p.n_tasks, np.inf)
+        best[tasks] = self._row_fn(arm, -1)[tasks]
+        for prev in tasks.tolist():
+            row = np.array(self._row_fn(arm, prev), dtype=float)[tasks]
+            row[tasks == prev] = np.inf
+            best[tasks] = np.minimum(best[tasks], row)
+        return best
 
     def row(self, arm: int, prev: int) -> FloatArray:
         if self.zero:
@@ -229,7 +248,21 @@ class TravelSetup(Setup):
             out[modes < 0] = math.inf
             return out
 
-        return BoundSetup(problem, row)
+        def min_in(a: int) -> FloatArray:
+            modes = np.flatnonzero(problem.mode_arm == a)
+            best = np.full(problem.n_tasks, math.inf)
+            if len(modes) == 0:
+                return best
+            dst = self.start[modes]  # (n, 3)
+            src = np.vstack([self.home[a][None, :], self.end[modes]])  # (n + 1, 3)
+            from scipy.spatial.distance import cdist
+
+            d = cdist(dst, src, "cityblock" if order == 1 else "euclidean")  # (n, n + 1)
+            d[np.arange(len(modes)), np.arange(len(modes)) + 1] = math.inf  # not from itself
+            best[problem.mode_task[modes]] = base[a] + d.min(axis=1) / speed[a]
+            return best
+
+        return BoundSetup(problem, row, min_in_fn=min_in)
 
     def to_dict(self) -> dict[str, Any]:
         return {

@@ -227,7 +227,6 @@ def solve_tree(
     stats = SearchStats()
     p = problem
     ev = Evaluator(p, waits=waits)
-    lb = lower_bound(p)
     best: Solution | None = None
 
     def offer(sol: Solution | None) -> None:
@@ -239,11 +238,14 @@ def solve_tree(
                 stats.record(time.perf_counter() - t0, sol.makespan)
 
     if p.n_tasks == 0:
-        return _finish(p, ev, None, lb, t0, seed, stats, proven=True)
-    # first schedule: the warm start, and the HEFT list
+        return _finish(p, ev, None, 0.0, t0, seed, stats, proven=True)
+    # first schedule (before anything else): the warm start, and the HEFT list
     if start is not None:
         offer(ev.evaluate(start.order, start.modes))
     offer(ev.evaluate(priority_order(p)))
+    ph = time.perf_counter()
+    lb = lower_bound(p)
+    stats.phases["bound"] = time.perf_counter() - ph
     proven = False
     can_prove, why = exact.applicable(p, opt.exact_max_tasks)
     stats.extra["exact"] = "applicable" if can_prove else why

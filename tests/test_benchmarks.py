@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -12,12 +13,22 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-@pytest.mark.parametrize("script", ["bench_zones"])
+@pytest.mark.parametrize(
+    "script",
+    [
+        "bench_zones",
+        "bench_kernel",
+        "bench_fjsp",
+        "bench_generated",
+        "bench_scale",
+        "bench_resolve",
+    ],
+)
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", f"benchmarks.{script}", "--quick"],
         cwd=ROOT,
-        env={"MULTIARM_RESULTS": str(tmp_path), "PATH": "/usr/bin:/bin"},
+        env={**os.environ, "MULTIARM_RESULTS": str(tmp_path)},
         capture_output=True,
         text=True,
         check=False,
@@ -27,4 +38,5 @@ def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
     out = list(tmp_path.glob("*.json"))
     assert out, "no JSON result written"
     data = json.loads(out[0].read_text())
-    assert "machine" in data and "seed" in data
+    assert "machine" in data and ("seed" in data or "seeds" in data)
+    assert (tmp_path / out[0].with_suffix(".md").name).is_file()

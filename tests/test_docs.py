@@ -36,7 +36,7 @@ def test_tdl_reference_example_parses() -> None:
     assert doc.names() == ("pick_and_place",)
 
 
-@pytest.mark.parametrize("name", ["tasklib.md", "zones.md", "README"])
+@pytest.mark.parametrize("name", ["tasklib.md", "zones.md", "scheduler.md", "README"])
 def test_python_examples_in_docs_run(
     name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -11,6 +11,11 @@ Sub-commands:
 ``check FILE...``
     Parse and validate files by extension: ``.tdl`` (trajectories), ``.sdl``
     (zones), ``.toml`` / ``.json`` (task sets).
+``schedule PROBLEM``
+    Solve a scheduling problem (``.json`` written by ``save_problem``, or an
+    FJSPLIB ``.fjs`` file) and print the result; ``--out`` writes the schedule.
+``bench``
+    Run the benchmark scripts (``--quick`` for a smoke run).
 """
 
 from __future__ import annotations
@@ -41,6 +46,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from zones import examples as zone_examples
 
     print(f"multiarm {__version__}: built-in example task sets\n")
+    print(
+        "(the cell model that turns these into scheduling problems comes with the workcell layer)\n"
+    )
     rows: list[dict[str, Any]] = [make().summary() for make in EXAMPLES.values()]
     _print_table(
         rows,
@@ -109,6 +117,40 @@ def cmd_check(args: argparse.Namespace) -> int:
     return status
 
 
+def cmd_schedule(args: argparse.Namespace) -> int:
+    """Solve a problem file and print (and optionally write) the schedule."""
+    import json
+
+    from scheduler import load_problem, lower_bound, read_fjsp, solve
+
+    path = Path(args.problem)
+    problem = read_fjsp(path) if path.suffix.lower() == ".fjs" else load_problem(path)
+    print(f"{problem!r}; lower bound {lower_bound(problem):.6g}")
+    result = solve(
+        problem, args.solver, time_limit=args.time_limit, seed=args.seed, waits=not args.no_waits
+    )
+    print(result.summary())
+    if result.schedule is not None and args.out:
+        Path(args.out).write_text(json.dumps(result.schedule.to_dict(problem), indent=1) + "\n")
+        print(f"schedule written to {args.out}")
+    return 0 if result.schedule is not None else 1
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    """Run the benchmark scripts (they live beside the package, in ``benchmarks/``)."""
+    import runpy
+    import sys as _sys
+
+    _sys.argv = ["benchmarks", *(["--quick"] if args.quick else [])]
+    try:
+        runpy.run_module("benchmarks", run_name="__main__")
+    except ImportError:
+        raise MultiarmError(
+            "the benchmarks/ folder is not importable: run from the project's root"
+        ) from None
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
     parser = argparse.ArgumentParser(
@@ -122,6 +164,21 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("check", help="parse and validate .tdl/.sdl/.toml/.json files")
     p.add_argument("files", nargs="+", metavar="FILE")
     p.set_defaults(func=cmd_check)
+    p = sub.add_parser("schedule", help="solve a problem (.json) or an FJSP instance (.fjs)")
+    p.add_argument("problem", metavar="PROBLEM")
+    p.add_argument("--solver", choices=["tree", "greedy", "cpsat"], default="tree")
+    p.add_argument("--time-limit", type=float, default=10.0, metavar="SECONDS")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--no-waits",
+        action="store_true",
+        help="delay whole tasks instead of waiting at zone borders",
+    )
+    p.add_argument("--out", metavar="FILE", help="write the schedule as JSON")
+    p.set_defaults(func=cmd_schedule)
+    p = sub.add_parser("bench", help="run the benchmarks (writes benchmarks/results/)")
+    p.add_argument("--quick", action="store_true", help="tiny sizes, a smoke run")
+    p.set_defaults(func=cmd_bench)
     return parser
 
 

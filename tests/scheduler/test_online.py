@@ -77,6 +77,17 @@ def test_same_seed_same_plan() -> None:
     assert a.schedule == b.schedule
 
 
+def test_a_release_override_never_advances_a_task() -> None:
+    p, plan, done = plan_and_state()
+    rest = [t for t in range(p.n_tasks) if t not in done]
+    late = max(rest, key=lambda t: p.task_release[t])
+    early = float(p.task_release[late]) - 5.0
+    r = reschedule(
+        p, CellState(time=15.0, done=done, releases={late: early}), plan, time_limit=0.05
+    )
+    assert r.schedule is not None and r.schedule.start[late] >= p.task_release[late]
+
+
 def test_without_a_previous_plan() -> None:
     p, _plan, done = plan_and_state()
     r = reschedule(p, CellState(time=15.0, done=done), None, time_limit=0.05)

@@ -45,3 +45,20 @@ def test_console_script_runs() -> None:
     exe = Path(sys.executable).with_name("multiarm")
     proc = subprocess.run([str(exe), "--version"], capture_output=True, text=True, check=True)
     assert proc.stdout.startswith("multiarm ")
+
+
+def test_schedule_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from scheduler import save_problem
+    from scheduler.generate import random_problem
+
+    path = save_problem(random_problem(3, 12, 3, 1, seed=1), tmp_path / "p.json")
+    out = tmp_path / "s.json"
+    assert main(["schedule", str(path), "--solver", "greedy", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "greedy:" in text and out.is_file()
+    fjs = tmp_path / "tiny.fjs"
+    fjs.write_text("1 2 1\n2 1 1 3 1 2 4\n")
+    assert main(["schedule", str(fjs), "--time-limit", "1"]) == 0
+    assert "optimal" in capsys.readouterr().out
+    assert main(["schedule", str(tmp_path / "missing.json")]) == 1
+    assert "cannot read problem file" in capsys.readouterr().err

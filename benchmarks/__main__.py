@@ -1,0 +1,26 @@
+"""Run every benchmark: ``python -m benchmarks [--quick]`` (``make bench``)."""
+
+from __future__ import annotations
+
+import sys
+
+from benchmarks import (
+    bench_fjsp,
+    bench_generated,
+    bench_kernel,
+    bench_resolve,
+    bench_scale,
+    bench_zones,
+)
+
+
+def main() -> None:
+    quick = ["--quick"] if "--quick" in sys.argv[1:] else []
+    for mod in (bench_kernel, bench_zones, bench_resolve, bench_scale, bench_generated, bench_fjsp):
+        print(f"== {mod.__name__}", flush=True)
+        sys.argv = [mod.__name__, *quick]
+        mod.main()
+
+
+if __name__ == "__main__":
+    main()
