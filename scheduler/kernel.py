@@ -408,7 +408,7 @@ def _query(
 
 
 @njit(cache=True)
-def _insert(tl_s, tl_e, tl_own, res_lo, res_n, r, s, e, own):
+def _insert(tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, s, e, own, task):
     lo = res_lo[r]
     n = res_n[r]
     x = lo
@@ -423,9 +423,11 @@ def _insert(tl_s, tl_e, tl_own, res_lo, res_n, r, s, e, own):
         tl_s[i] = tl_s[i - 1]
         tl_e[i] = tl_e[i - 1]
         tl_own[i] = tl_own[i - 1]
+        tl_task[i] = tl_task[i - 1]
     tl_s[x] = s
     tl_e[x] = e
     tl_own[x] = own
+    tl_task[x] = task
     res_n[r] = n + 1
 
 
@@ -461,6 +463,7 @@ def _commit(
     tl_s,
     tl_e,
     tl_own,
+    tl_task,
     res_lo,
     res_n,
     arm_t,
@@ -519,7 +522,7 @@ def _commit(
                     ws += waits[j]
                 if b < e:
                     we += waits[j]
-            _insert(tl_s, tl_e, tl_own, res_lo, res_n, r, S + s + ws, S + e + we, a)
+            _insert(tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, S + s + ws, S + e + we, a, t)
         else:
             p0 = s
             wp = 0.0
@@ -533,13 +536,17 @@ def _commit(
                     if not (s < b < e) or waits[j] <= 0.0:
                         continue
                     # piece [p0, b) then the wait at b
-                    _insert(tl_s, tl_e, tl_own, res_lo, res_n, r, S + p0 + wp, S + b + wp, a)
+                    _insert(
+                        tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, S + p0 + wp, S + b + wp, a, t
+                    )
                     wp += waits[j]
                     p0 = b
                 else:
-                    _insert(tl_s, tl_e, tl_own, res_lo, res_n, r, S + p0 + wp, S + e + wp, a)
+                    _insert(
+                        tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, S + p0 + wp, S + e + wp, a, t
+                    )
     for q in range(tool_ptr[m], tool_ptr[m + 1]):
-        _insert(tl_s, tl_e, tl_own, res_lo, res_n, tool_res[q], S, end, a)
+        _insert(tl_s, tl_e, tl_own, tl_task, res_lo, res_n, tool_res[q], S, end, a, t)
 
 
 @njit(cache=True)
@@ -561,6 +568,7 @@ class State:
     tl_s: FloatArray
     tl_e: FloatArray
     tl_own: IntArray
+    tl_task: IntArray
     res_n: IntArray
     arm_t: IntArray
     arm_n: IntArray
@@ -575,6 +583,7 @@ class State:
             self.tl_s.copy(),
             self.tl_e.copy(),
             self.tl_own.copy(),
+            self.tl_task.copy(),
             self.res_n.copy(),
             self.arm_t.copy(),
             self.arm_n.copy(),
@@ -766,6 +775,7 @@ class Instance:
             tl_s=np.zeros(max(self.tl_size, 1)),
             tl_e=np.zeros(max(self.tl_size, 1)),
             tl_own=np.zeros(max(self.tl_size, 1), dtype=np.int64),
+            tl_task=np.full(max(self.tl_size, 1), -1, dtype=np.int64),
             res_n=np.zeros(self.R, dtype=np.int64),
             arm_t=np.zeros(max(self.arm_size, 1), dtype=np.int64),
             arm_n=np.zeros(self.problem.n_arms, dtype=np.int64),
@@ -888,6 +898,7 @@ class Instance:
             st.tl_s,
             st.tl_e,
             st.tl_own,
+            st.tl_task,
             self.res_lo,
             st.res_n,
             st.arm_t,
@@ -955,6 +966,7 @@ def _decode(
     tl_s,
     tl_e,
     tl_own,
+    tl_task,
     res_lo,
     res_n,
     arm_t,
@@ -1099,6 +1111,7 @@ def _decode(
                 tl_s,
                 tl_e,
                 tl_own,
+                tl_task,
                 res_lo,
                 res_n,
                 arm_t,
@@ -1277,6 +1290,7 @@ def _state_args(inst: Instance, st: State) -> tuple[Any, ...]:
         st.tl_s,
         st.tl_e,
         st.tl_own,
+        st.tl_task,
         inst.res_lo,
         st.res_n,
         st.arm_t,
@@ -1514,6 +1528,7 @@ def _seq_decode(
     tl_s,
     tl_e,
     tl_own,
+    tl_task,
     res_lo,
     res_n,
     arm_t,
@@ -1559,6 +1574,9 @@ def _seq_decode(
             est = max(release[t], avail[a], arm_lb[a])
             size = _heap_push(keys, vals, size, est, t)
     placed = 0
+    blocked = np.empty(T, dtype=np.int64)  # waiting for an arm to leave its start zone
+    blocked_key = np.empty(T)
+    nblocked = 0
     while size > 0:
         t, size = _heap_pop(keys, vals, size)
         m = modes[t]
@@ -1613,7 +1631,15 @@ def _seq_decode(
             taus,
         )
         if not (end < INF):
-            return placed
+            blocked[nblocked] = t
+            blocked_key[nblocked] = S0
+            nblocked += 1
+            continue
+        if k == 0 and start_ptr[a + 1] > start_ptr[a]:
+            # the arm leaves its start zones: what waited for them may go now
+            for i in range(nblocked):
+                size = _heap_push(keys, vals, size, blocked_key[i], blocked[i])
+            nblocked = 0
         nb = bd_ptr[m + 1] - bd_ptr[m]
         for j in range(nbmax):
             best_w[j] = waits_out[j] if (use_waits and j < nb) else 0.0
@@ -1649,6 +1675,7 @@ def _seq_decode(
             tl_s,
             tl_e,
             tl_own,
+            tl_task,
             res_lo,
             res_n,
             arm_t,
@@ -1748,6 +1775,7 @@ def seq_decode(
         st.tl_s,
         st.tl_e,
         st.tl_own,
+        st.tl_task,
         inst.res_lo,
         st.res_n,
         st.arm_t,

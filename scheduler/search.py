@@ -484,10 +484,16 @@ def local_search(
     def out_of_budget() -> bool:
         return time.perf_counter() >= deadline or ev.evaluations >= limit
 
+    prep = 0.0  # the fixed cost of an iteration: do not start one that cannot finish
     while not out_of_budget() and best.makespan > lower + 1e-9:
+        if time.perf_counter() + prep > deadline:
+            break
+        tp = time.perf_counter()
         sched = ev.schedule(cur)
         improved = False
-        for order, modes in neighbours(ev, cur, sched, rng):
+        moves = neighbours(ev, cur, sched, rng)
+        prep = time.perf_counter() - tp
+        for order, modes in moves:
             if out_of_budget():
                 break
             cand = ev.evaluate(order, modes)

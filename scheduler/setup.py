@@ -51,8 +51,10 @@ class BoundSetup:
         zero: bool = False,
         cache_rows: int = 8192,
         min_in_fn: Callable[[int], FloatArray] | None = None,
+        time_fn: Callable[[int, int, int], float] | None = None,
     ) -> None:
         self.problem = problem
+        self._time_fn = time_fn
         self._row_fn = row_fn
         self.zero = zero
         self._zeros = np.zeros(problem.n_tasks)
@@ -95,6 +97,8 @@ class BoundSetup:
     def time(self, arm: int, prev: int, nxt: int) -> float:
         if self.zero:
             return 0.0
+        if self._time_fn is not None:
+            return self._time_fn(arm, prev, nxt)
         return float(self.row(arm, prev)[nxt])
 
     def check(self) -> None:
@@ -262,7 +266,23 @@ class TravelSetup(Setup):
             best[problem.mode_task[modes]] = base[a] + d.min(axis=1) / speed[a]
             return best
 
-        return BoundSetup(problem, row, min_in_fn=min_in)
+        start, end, home = self.start, self.end, self.home
+
+        def one(a: int, prev: int, nxt: int) -> float:
+            m = mode_of[a, nxt]
+            if m < 0:
+                return math.inf
+            src = home[a] if prev < 0 else end[mode_of[a, prev]]
+            dst = start[m]
+            if order == 1:
+                d = abs(dst[0] - src[0]) + abs(dst[1] - src[1]) + abs(dst[2] - src[2])
+            else:
+                d = math.sqrt(
+                    (dst[0] - src[0]) ** 2 + (dst[1] - src[1]) ** 2 + (dst[2] - src[2]) ** 2
+                )
+            return float(base[a] + d / speed[a])
+
+        return BoundSetup(problem, row, min_in_fn=min_in, time_fn=one)
 
     def to_dict(self) -> dict[str, Any]:
         return {

@@ -74,22 +74,31 @@ def critical_chain(
         lo = int(inst.arm_lo[a])
         ts = st.arm_t[lo : lo + n]
         prev[ts[1:]] = ts[:-1]
-    res_end: dict[int, dict[float, list[int]]] = {}
-    starts_of: dict[int, list[tuple[int, float]]] = {}
-    if p.n_windows or p.n_tools:
-        shapes = p.shapes
-        for t in range(T):
-            m = int(mode[t])
-            sh = shapes[m]
-            if not (sh.exclusive or sh.moves or sh.tools):
-                continue
-            w = st.t_waits[t, : len(sh.borders)]
-            ivs = sh.intervals(float(start[t]), w) + [
-                (r, float(start[t]), float(end[t])) for r in sh.tools
-            ]
-            starts_of[t] = [(r, s) for r, s, _ in ivs]
-            for r, _, e in ivs:
-                res_end.setdefault(r, {}).setdefault(round(e, 6), []).append(t)
+    shapes = p.shapes
+    has_resources = bool(p.n_windows or p.n_tools)
+
+    def blockers(t: int) -> list[int]:
+        """Tasks whose interval on a resource ends exactly where one of t's starts."""
+        m = int(mode[t])
+        sh = shapes[m]
+        if not (sh.exclusive or sh.moves or sh.tools):
+            return []
+        w = st.t_waits[t, : len(sh.borders)]
+        starts = [(r, s) for r, s, _ in sh.intervals(float(start[t]), w)]
+        starts += [(r, float(start[t])) for r in sh.tools]
+        out = []
+        for r, s in starts:
+            lo = int(inst.res_lo[r])
+            n = int(st.res_n[r])
+            ends = st.tl_e[lo : lo + n]
+            k = int(np.searchsorted(ends, s - _TOL))
+            while k < n and ends[k] <= s + _TOL:
+                x = int(st.tl_task[lo + k])
+                if x >= 0 and x != t and arm[x] != arm[t]:
+                    out.append(x)
+                k += 1
+        return out
+
     chain: list[tuple[int, str, int]] = []
     t = int(np.argmax(end))
     seen: set[int] = set()
@@ -103,10 +112,8 @@ def critical_chain(
         for q in p.task_preds[t]:
             if abs(float(end[q]) - S) <= _TOL:
                 reasons.append(("pred", q))
-        for r, s in starts_of.get(t, ()):
-            for x in res_end.get(r, {}).get(round(s, 6), ()):
-                if x != t and arm[x] != arm[t]:
-                    reasons.append(("resource", x))
+        if has_resources:
+            reasons.extend(("resource", x) for x in blockers(t))
         if not reasons:
             chain.append((t, "release", -1))
             break
@@ -222,7 +229,11 @@ def tabu_search(
     def to_solution(s: _Seq) -> Solution:
         return Solution(s.order.copy(), s.modes.copy(), s.key[0], s.key[1], s.state)
 
+    prep = 0.0  # the fixed cost of an iteration: do not start one that cannot finish
     while not out_of_budget() and best.key[0] > lower + 1e-9:
+        if time.perf_counter() + prep > deadline:
+            break
+        tp = time.perf_counter()
         it += 1
         chain = critical_chain(p, cur.state, rng)
         pos = np.zeros(p.n_tasks, dtype=np.int64)
@@ -295,6 +306,7 @@ def tabu_search(
                 est = r + d2 + q_
             estimates.append((est, rng.random(), mv))
         estimates.sort(key=lambda e: (e[0], e[1]))
+        prep = time.perf_counter() - tp
         if random_moves and len(estimates) > exact_moves:
             # a few moves past the top of the ranking, at random
             rest = estimates[exact_moves - random_moves :]
