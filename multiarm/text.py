@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 import re
+from os import PathLike, fspath
+from pathlib import Path
 from typing import Any
 
 import lark
@@ -22,7 +24,7 @@ from lark.exceptions import (
 
 from multiarm.errors import ParseError, SourceError
 
-__all__ = ["fmt_float", "meta_location", "parse_text", "quote"]
+__all__ = ["fmt_float", "meta_location", "parse_text", "quote", "read_source", "unquote"]
 
 
 def fmt_float(value: float) -> str:
@@ -168,6 +170,19 @@ def _convert(
         line, column = _end_position(text)
     expected = sorted({d for n in names for d in _describe_terminal(parser, n)})
     return cls(message, filename=filename, line=line, column=column, expected=expected)
+
+
+def read_source(path: str | PathLike[str], error: type[SourceError], what: str) -> str:
+    """The UTF-8 text of a source file; an unreadable or undecodable file
+    raises ``error`` (e.g. ``TDLError``) naming the file."""
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise error(f"cannot read {what} file: {exc.strerror}", filename=fspath(path)) from None
+    except UnicodeDecodeError as exc:
+        raise error(
+            f"{what} file is not UTF-8 text ({exc.reason})", filename=fspath(path)
+        ) from None
 
 
 def meta_location(meta: Any) -> tuple[int | None, int | None]:

@@ -70,19 +70,6 @@ def _min_incoming_setup(p: Problem) -> FloatArray:
     return out
 
 
-def _topological(p: Problem) -> list[int]:
-    indeg = [len(ps) for ps in p.task_preds]
-    order = [t for t in range(p.n_tasks) if indeg[t] == 0]
-    i = 0
-    while i < len(order):
-        for s in p.task_succs[order[i]]:
-            indeg[s] -= 1
-            if indeg[s] == 0:
-                order.append(s)
-        i += 1
-    return order
-
-
 def heads_and_tails(p: Problem) -> tuple[FloatArray, FloatArray, FloatArray]:
     """(earliest start, shortest duration, tail) per task.
 
@@ -93,7 +80,7 @@ def heads_and_tails(p: Problem) -> tuple[FloatArray, FloatArray, FloatArray]:
     mind = p.min_duration()
     avail = np.full(p.n_tasks, np.inf)
     np.minimum.at(avail, p.mode_task, p.arm_available[p.mode_arm])
-    order = _topological(p)
+    order = p.topological_order
     est = np.maximum(p.task_release, avail)
     for t in order:
         for s in p.task_succs[t]:

@@ -242,10 +242,7 @@ def solve_cpsat(
     stats = SearchStats()
     lb = lower_bound(p)
     if p.n_tasks == 0:
-        empty = Schedule(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), (), np.zeros(0))
-        return Result(
-            SolveStatus.OPTIMAL, empty, 0.0, 0.0, time.perf_counter() - t0, "cpsat", seed, stats
-        )
+        return Result.empty("cpsat", seed, time.perf_counter() - t0, stats)
     ev = Evaluator(p, waits=waits)
     first = ev.evaluate(priority_order(p))
     horizon = (

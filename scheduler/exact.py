@@ -115,17 +115,7 @@ def branch_and_bound(
     shapes = p.shapes
     tails = np.zeros(T)
     mind = p.min_duration()
-    order = list(range(T))
-    indeg = [len(ps) for ps in p.task_preds]
-    topo = [t for t in range(T) if indeg[t] == 0]
-    i = 0
-    while i < len(topo):
-        for s in p.task_succs[topo[i]]:
-            indeg[s] -= 1
-            if indeg[s] == 0:
-                topo.append(s)
-        i += 1
-    order = topo
+    order = list(p.topological_order)
     for t in reversed(order):
         for s in p.task_succs[t]:
             tails[t] = max(tails[t], mind[s] + tails[s])

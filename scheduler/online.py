@@ -81,26 +81,24 @@ class CellState:
     arm_busy_until: Mapping[ArmRef, float] = field(default_factory=dict)
 
 
-def _task(p: Problem, ref: TaskRef) -> int:
+def _ref(names: tuple[str, ...], ref: int | str, what: str) -> int:
+    """The id of a task or arm given by name or id."""
     if isinstance(ref, str):
         try:
-            return p.task_names.index(ref)
+            return names.index(ref)
         except ValueError:
-            raise UsageError(f"unknown task {ref!r}") from None
-    if not 0 <= int(ref) < p.n_tasks:
-        raise UsageError(f"task id {ref} out of range")
+            raise UsageError(f"unknown {what} {ref!r}") from None
+    if not 0 <= int(ref) < len(names):
+        raise UsageError(f"{what} id {ref} out of range")
     return int(ref)
+
+
+def _task(p: Problem, ref: TaskRef) -> int:
+    return _ref(p.task_names, ref, "task")
 
 
 def _arm(p: Problem, ref: ArmRef) -> int:
-    if isinstance(ref, str):
-        try:
-            return p.arm_names.index(ref)
-        except ValueError:
-            raise UsageError(f"unknown arm {ref!r}") from None
-    if not 0 <= int(ref) < p.n_arms:
-        raise UsageError(f"arm id {ref} out of range")
-    return int(ref)
+    return _ref(p.arm_names, ref, "arm")
 
 
 def reschedule(

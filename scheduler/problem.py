@@ -216,6 +216,20 @@ class Problem:
         return len(self.tool_names)
 
     @cached_property
+    def topological_order(self) -> tuple[int, ...]:
+        """Task ids in an order where every task comes after its predecessors."""
+        indeg = [len(ps) for ps in self.task_preds]
+        order = [t for t in range(self.n_tasks) if indeg[t] == 0]
+        i = 0
+        while i < len(order):
+            for s in self.task_succs[order[i]]:
+                indeg[s] -= 1
+                if indeg[s] == 0:
+                    order.append(s)
+            i += 1
+        return tuple(order)
+
+    @cached_property
     def shapes(self) -> Shapes:
         """Per-mode timing structure (:mod:`scheduler.timing`), computed once."""
         return Shapes(self)

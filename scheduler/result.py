@@ -92,6 +92,11 @@ class Result:
             return 0.0
         return max(0.0, (self.objective - self.bound) / self.objective)
 
+    @classmethod
+    def empty(cls, solver: str, seed: int, runtime: float, stats: SearchStats) -> Result:
+        """The (optimal, empty) result of a problem without tasks."""
+        return cls(SolveStatus.OPTIMAL, Schedule.empty(), 0.0, 0.0, runtime, solver, seed, stats)
+
     def summary(self) -> str:
         """One line for logs."""
         return (

@@ -117,6 +117,11 @@ class Schedule:
         )
         return cls(modes_a, starts_a, ends, w, b)
 
+    @classmethod
+    def empty(cls) -> Schedule:
+        """The schedule of a problem without tasks."""
+        return cls(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), (), np.zeros(0))
+
     @property
     def n_tasks(self) -> int:
         return len(self.mode)

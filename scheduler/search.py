@@ -62,26 +62,13 @@ def rank_upward(problem: Problem) -> FloatArray:
     np.add.at(mean, p.mode_task, p.mode_duration)
     mean /= np.maximum(np.bincount(p.mode_task, minlength=p.n_tasks), 1)
     rank = mean.copy()
-    order = _topological(p)
+    order = p.topological_order
     for t in reversed(order):
         best = 0.0
         for s in p.task_succs[t]:
             best = max(best, rank[s])
         rank[t] = mean[t] + best
     return rank
-
-
-def _topological(p: Problem) -> list[int]:
-    indeg = [len(ps) for ps in p.task_preds]
-    order = [t for t in range(p.n_tasks) if indeg[t] == 0]
-    i = 0
-    while i < len(order):
-        for s in p.task_succs[order[i]]:
-            indeg[s] -= 1
-            if indeg[s] == 0:
-                order.append(s)
-        i += 1
-    return order
 
 
 def priority_order(
@@ -285,6 +272,24 @@ class Evaluator:
         return sched
 
 
+class Budget:
+    """When an improvement loop must stop: a wall-clock ``deadline``, a number
+    of decodes (``max_evaluations``, counted on ``ev``), and the fixed cost of
+    one iteration (``prep``, measured as it goes) that must still fit."""
+
+    def __init__(self, ev: Evaluator, deadline: float, max_evaluations: int | None) -> None:
+        self.ev = ev
+        self.deadline = deadline
+        self.limit = math.inf if max_evaluations is None else ev.evaluations + max_evaluations
+        self.prep = 0.0
+
+    def spent(self) -> bool:
+        return time.perf_counter() >= self.deadline or self.ev.evaluations >= self.limit
+
+    def room_for_iteration(self) -> bool:
+        return not self.spent() and time.perf_counter() + self.prep <= self.deadline
+
+
 # ------------------------------------------------------------ critical path
 
 
@@ -479,20 +484,14 @@ def local_search(
     best = cur = start
     stall = 0
     strength = 2
-    limit = math.inf if max_evaluations is None else ev.evaluations + max_evaluations
-
-    def out_of_budget() -> bool:
-        return time.perf_counter() >= deadline or ev.evaluations >= limit
-
-    prep = 0.0  # the fixed cost of an iteration: do not start one that cannot finish
-    while not out_of_budget() and best.makespan > lower + 1e-9:
-        if time.perf_counter() + prep > deadline:
-            break
+    budget = Budget(ev, deadline, max_evaluations)
+    out_of_budget = budget.spent
+    while budget.room_for_iteration() and best.makespan > lower + 1e-9:
         tp = time.perf_counter()
         sched = ev.schedule(cur)
         improved = False
         moves = neighbours(ev, cur, sched, rng)
-        prep = time.perf_counter() - tp
+        budget.prep = time.perf_counter() - tp
         for order, modes in moves:
             if out_of_budget():
                 break

@@ -23,7 +23,7 @@ from multiarm.errors import UsageError
 from scheduler.bounds import lower_bound
 from scheduler.problem import Problem
 from scheduler.result import Result, SearchStats, SolveStatus
-from scheduler.schedule import Schedule, validate
+from scheduler.schedule import validate
 from scheduler.search import Evaluator, priority_order
 
 __all__ = ["SOLVERS", "SolverName", "solve", "solve_greedy"]
@@ -41,10 +41,7 @@ def solve_greedy(problem: Problem, seed: int = 0, *, waits: bool = True) -> Resu
     stats = SearchStats()
     lb = lower_bound(p)
     if p.n_tasks == 0:
-        empty = Schedule(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), (), np.zeros(0))
-        return Result(
-            SolveStatus.OPTIMAL, empty, 0.0, 0.0, time.perf_counter() - t0, "greedy", seed, stats
-        )
+        return Result.empty("greedy", seed, time.perf_counter() - t0, stats)
     ev = Evaluator(p, waits=waits)
     sol = ev.evaluate(priority_order(p))
     stats.evaluations = ev.evaluations

@@ -36,7 +36,7 @@ import numpy as np
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel import State, seq_decode
 from scheduler.problem import Problem
-from scheduler.search import Evaluator, Solution
+from scheduler.search import Budget, Evaluator, Solution
 
 __all__ = ["critical_chain", "tabu_search"]
 
@@ -197,10 +197,8 @@ def tabu_search(
         return start
     frozen = ev.frozen
     allowed = ev.allowed
-    limit = math.inf if max_evaluations is None else ev.evaluations + max_evaluations
-
-    def out_of_budget() -> bool:
-        return time.perf_counter() >= deadline or ev.evaluations >= limit
+    budget = Budget(ev, deadline, max_evaluations)
+    out_of_budget = budget.spent
 
     def decode(modes: IntArray, seq: IntArray, seq_n: IntArray) -> _Seq | None:
         ev.evaluations += 1
@@ -229,10 +227,7 @@ def tabu_search(
     def to_solution(s: _Seq) -> Solution:
         return Solution(s.order.copy(), s.modes.copy(), s.key[0], s.key[1], s.state)
 
-    prep = 0.0  # the fixed cost of an iteration: do not start one that cannot finish
-    while not out_of_budget() and best.key[0] > lower + 1e-9:
-        if time.perf_counter() + prep > deadline:
-            break
+    while budget.room_for_iteration() and best.key[0] > lower + 1e-9:
         tp = time.perf_counter()
         it += 1
         chain = critical_chain(p, cur.state, rng)
@@ -306,7 +301,7 @@ def tabu_search(
                 est = r + d2 + q_
             estimates.append((est, rng.random(), mv))
         estimates.sort(key=lambda e: (e[0], e[1]))
-        prep = time.perf_counter() - tp
+        budget.prep = time.perf_counter() - tp
         if random_moves and len(estimates) > exact_moves:
             # a few moves past the top of the ranking, at random
             rest = estimates[exact_moves - random_moves :]

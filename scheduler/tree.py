@@ -304,6 +304,8 @@ def solve_tree(
         if best is None:
             offer(ev.evaluate(priority_order(p, rng=rng, noise=opt.restart_noise)))
             if best is None:
+                if time_limit is None and width > opt.max_width and rounds > 12:
+                    break  # nothing schedulable found after a fair effort: give up (status unknown)
                 continue
         # improvement: tabu search on arm sequences (list local search with a blocking oracle)
         ph = time.perf_counter()
@@ -351,10 +353,7 @@ def _finish(
 
     runtime = time.perf_counter() - t0
     if p.n_tasks == 0:
-        from scheduler.schedule import Schedule
-
-        empty = Schedule(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), (), np.zeros(0))
-        return Result(SolveStatus.OPTIMAL, empty, 0.0, 0.0, runtime, "tree", seed, stats)
+        return Result.empty("tree", seed, runtime, stats)
     if best is None:
         status = SolveStatus.INFEASIBLE if proven else SolveStatus.UNKNOWN
         return Result(status, None, math.inf, lb, runtime, "tree", seed, stats)

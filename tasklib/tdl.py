@@ -44,7 +44,6 @@ from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
 from os import PathLike, fspath
-from pathlib import Path
 from typing import Any, Literal, TypeVar
 
 import lark
@@ -52,7 +51,7 @@ import numpy as np
 
 from multiarm.errors import TDLError, TDLSyntaxError, ValidationError
 from multiarm.graph import find_cycle
-from multiarm.text import fmt_float, meta_location, parse_text, quote, unquote
+from multiarm.text import fmt_float, meta_location, parse_text, quote, read_source, unquote
 from multiarm.types import FloatArray, Point3, Quaternion, Transform, check_finite
 from tasklib.pose import Pose, quat_from_rpy, quat_to_matrix
 
@@ -587,15 +586,7 @@ def parse_tdl(text: str, filename: str | None = None) -> TDLDocument:
 
 def load_tdl(path: str | PathLike[str]) -> TDLDocument:
     """Read and parse a ``.tdl`` file (errors name the file)."""
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise TDLError(f"cannot read TDL file: {exc.strerror}", filename=fspath(path)) from None
-    except UnicodeDecodeError as exc:
-        raise TDLError(
-            f"TDL file is not UTF-8 text ({exc.reason})", filename=fspath(path)
-        ) from None
+    text = read_source(path, TDLError, "TDL")
     return parse_tdl(text, filename=fspath(path))
 
 

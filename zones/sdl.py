@@ -30,13 +30,12 @@ import os
 from functools import cache
 from importlib import resources
 from os import PathLike, fspath
-from pathlib import Path
 from typing import Any
 
 import lark
 
 from multiarm.errors import SDLError, SDLSyntaxError, ValidationError
-from multiarm.text import fmt_float, meta_location, parse_text, quote, unquote
+from multiarm.text import fmt_float, meta_location, parse_text, quote, read_source, unquote
 from multiarm.types import Point3
 from zones.geometry import (
     AABox,
@@ -263,15 +262,7 @@ def parse_sdl(text: str, filename: str | None = None) -> ZoneMap:
 
 def load_sdl(path: str | PathLike[str]) -> ZoneMap:
     """Read and parse an ``.sdl`` file (errors name the file)."""
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SDLError(f"cannot read SDL file: {exc.strerror}", filename=fspath(path)) from None
-    except UnicodeDecodeError as exc:
-        raise SDLError(
-            f"SDL file is not UTF-8 text ({exc.reason})", filename=fspath(path)
-        ) from None
+    text = read_source(path, SDLError, "SDL")
     return parse_sdl(text, fspath(path))
 
 

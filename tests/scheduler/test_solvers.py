@@ -279,3 +279,17 @@ def test_fjsp_small_instances_are_solved_to_optimality(tmp_path) -> None:  # typ
     assert results["tree"].objective == results["cpsat"].objective
     assert results["greedy"].objective >= results["tree"].objective
     _ = itertools
+
+
+def test_unschedulable_problem_ends_without_a_schedule() -> None:
+    # B stands in exclusive zone E for good (it has no task), and the only task needs E
+    m = Model()
+    m.add_zone("E")
+    m.add_arm("A")
+    m.add_arm("B", start_zones=["E"])
+    m.add_task("t")
+    m.add_mode("t", "A", 1.0, windows=[Window("E", 0.0, 1.0)])
+    p = m.build()
+    for solver in ("greedy", "tree"):
+        r = solve(p, solver, time_limit=None if solver == "tree" else 1.0)  # type: ignore[arg-type]
+        assert r.schedule is None and r.status.value in ("unknown", "infeasible")
