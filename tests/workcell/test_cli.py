@@ -19,6 +19,8 @@ def test_demo_prints_every_example(capsys: pytest.CaptureFixture[str]) -> None:
     for name in ("supersigma", "scara4", "cell8"):
         assert out.count(name) >= 2  # task set and zone map
     assert "depth" in out
+    for solver in ("greedy", "tree", "cpsat"):  # the scheduling step ran with every solver
+        assert f"\n{solver} " in out
 
 
 def test_check_good_and_bad_files(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
