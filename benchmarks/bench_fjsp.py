@@ -115,7 +115,7 @@ def main(argv: list[str] | None = None) -> None:
         "# FJSP benchmark",
         "",
         f"Time limit {args.time_limit:g} s per solver and instance, seed {args.seed}, 2 cores (CP-SAT uses 2 "
-        "workers; tree and greedy one). Makespans validated. Gap = (makespan - best known) / best known.",
+        "workers, tree 2 processes (TreeOptions.workers), greedy one). Makespans validated. Gap = (makespan - best known) / best known.",
         "",
         "| instance | tasks | arms | BKS | our LB | "
         + " | ".join(f"{s} (gap, first s, best s)" for s in args.solvers)

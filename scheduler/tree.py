@@ -32,8 +32,11 @@ A schedule whose makespan meets the global lower bound is optimal at once.
 from __future__ import annotations
 
 import math
+import multiprocessing
+import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -72,6 +75,13 @@ class TreeOptions:
     exact_max_nodes: int | None = None
     """Node budget of the exact phase (default: none without a time limit,
     ``100 * max_evaluations`` with a work limit)."""
+    workers: int = field(default_factory=lambda: min(2, os.cpu_count() or 1))
+    """Processes searching at once (like CP-SAT's workers): the others run
+    independent improvement from other seeds in forked processes, and the
+    best schedule wins. Used only with a wall-clock limit of at least
+    ``parallel_min_time`` and where ``fork`` exists (Linux); work-limited runs
+    stay in one process, so they remain exactly repeatable."""
+    parallel_min_time: float = 1.0
 
 
 @dataclass
@@ -210,6 +220,42 @@ def beam_pass(
     )
 
 
+def _portfolio_member(conn, problem: Problem, waits: bool, seed: int, seconds: float) -> None:  # type: ignore[no-untyped-def]
+    """A forked worker: improve the HEFT schedule from its own seed, send back the best schedule."""
+    try:
+        t0 = time.perf_counter()
+        ev = Evaluator(problem, waits=waits)
+        rng = np.random.default_rng(seed)
+        sol = ev.evaluate(priority_order(problem, rng=rng, noise=0.1))
+        if sol is None:
+            conn.send(None)
+            return
+        found = [time.perf_counter() - t0]
+
+        def mark(_s: Solution) -> None:
+            found[0] = time.perf_counter() - t0
+
+        improve = local_search if ev.blocking else tabu_search
+        best = improve(ev, sol, t0 + seconds, rng, on_improve=mark, lower=0.0)
+        s = ev.schedule(best)
+        conn.send(
+            (
+                best.makespan,
+                s.mode,
+                s.start,
+                s.end,
+                [w.copy() for w in s.waits],
+                s.blocking,
+                found[0],
+                ev.evaluations,
+            )
+        )
+    except Exception as exc:  # pragma: no cover - reported, never fatal for the main search
+        conn.send(("error", repr(exc)))
+    finally:
+        conn.close()
+
+
 def solve_tree(
     problem: Problem,
     time_limit: float | None,
@@ -249,6 +295,28 @@ def solve_tree(
     proven = False
     can_prove, why = exact.applicable(p, opt.exact_max_tasks)
     stats.extra["exact"] = "applicable" if can_prove else why
+    members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
+    remaining = deadline - time.perf_counter()
+    if (
+        opt.workers > 1
+        and time_limit is not None
+        and opt.max_evaluations is None
+        and not can_prove
+        and remaining >= opt.parallel_min_time
+        and "fork" in multiprocessing.get_all_start_methods()
+        and (best is None or best.makespan > lb + 1e-9)
+    ):
+        ctx = multiprocessing.get_context("fork")
+        for k in range(1, opt.workers):
+            here, there = ctx.Pipe(duplex=False)
+            proc = ctx.Process(
+                target=_portfolio_member,
+                args=(there, p, waits, seed + 7919 * k, remaining - 0.15),
+                daemon=True,
+            )
+            proc.start()
+            there.close()
+            members.append((proc, here))
     width = 1
     rounds = 0
     work_limit = opt.max_evaluations
@@ -336,6 +404,34 @@ def solve_tree(
         ):
             break  # unlimited budget on a big problem: stop after a fair effort
     stats.evaluations = ev.evaluations
+    for member, pipe in members:
+        got = pipe.recv() if pipe.poll(max(0.05, deadline - time.perf_counter() + 2.0)) else None
+        member.join(timeout=1.0)
+        if member.is_alive():  # pragma: no cover - a worker that did not stop in time
+            member.terminate()
+        if (
+            isinstance(got, tuple)
+            and len(got) == 8
+            and (best is None or got[0] < best.makespan - 1e-9)
+        ):
+            from scheduler.schedule import Schedule
+
+            mk, w_mode, w_start, w_end, w_waits, w_blocking, found, _evals = got
+            stats.extra["worker_schedule"] = Schedule(
+                w_mode, w_start, w_end, tuple(w_waits), w_blocking
+            )
+            stats.record(found, mk)
+            best = Solution(
+                np.lexsort((np.arange(p.n_tasks), w_start)).astype(np.int64),
+                w_mode.copy(),
+                mk,
+                float(w_end.sum()),
+                None,
+            )
+        if isinstance(got, tuple) and len(got) == 8:
+            stats.evaluations += int(got[7])
+        elif isinstance(got, tuple) and got and got[0] == "error":
+            stats.extra["worker_error"] = got[1]
     return _finish(p, ev, best, lb, t0, seed, stats, proven)
 
 
@@ -357,7 +453,9 @@ def _finish(
     if best is None:
         status = SolveStatus.INFEASIBLE if proven else SolveStatus.UNKNOWN
         return Result(status, None, math.inf, lb, runtime, "tree", seed, stats)
-    sched = stats.extra.pop("exact_schedule", None) if best.state is None else None
+    sched = None
+    if best.state is None:
+        sched = stats.extra.pop("worker_schedule", None) or stats.extra.pop("exact_schedule", None)
     if sched is None:
         sched = ev.schedule(best)
     mk = validate(p, sched)

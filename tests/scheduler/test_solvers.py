@@ -293,3 +293,16 @@ def test_unschedulable_problem_ends_without_a_schedule() -> None:
     for solver in ("greedy", "tree"):
         r = solve(p, solver, time_limit=None if solver == "tree" else 1.0)  # type: ignore[arg-type]
         assert r.schedule is None and r.status.value in ("unknown", "infeasible")
+
+
+def test_parallel_workers_return_a_valid_schedule() -> None:
+    p = random_problem(4, 60, 4, 2, seed=11)
+    r = solve(
+        p, "tree", time_limit=1.5, seed=3, options=TreeOptions(workers=2, parallel_min_time=0.5)
+    )
+    assert r.schedule is not None and validate(p, r.schedule) == r.objective
+    assert "worker_error" not in r.stats.extra
+    single = solve(
+        p, "tree", time_limit=None, seed=3, options=TreeOptions(workers=2, max_evaluations=200)
+    )
+    assert single.schedule is not None  # a work limit keeps the search in one process
