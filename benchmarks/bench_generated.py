@@ -38,6 +38,18 @@ SIZES = [
 ]
 
 
+def _num(x: float) -> str:
+    """A makespan, or "none" when the solver returned no schedule."""
+    return f"{x:.0f}" if math.isfinite(x) else "none"
+
+
+def _pct(x: float, sign: bool = False) -> str:
+    """A ratio as a percentage, or "-" when one side has no schedule."""
+    if not math.isfinite(x):
+        return "-"
+    return f"{100 * x:+.2f}%" if sign else f"{100 * x:.2f}%"
+
+
 def report(rows: list[dict[str, Any]], time_limit: float, reference_limit: float) -> str:
     """The markdown table and summary of the rows."""
     lines = [
@@ -54,8 +66,8 @@ def report(rows: list[dict[str, Any]], time_limit: float, reference_limit: float
     for r in rows:
         lines.append(
             f"| {r['size']} | {r['seed']} | {'yes' if r['proven_optimal'] else 'no'} | {r['target']:.1f} | "
-            f"{r['reference']:.0f} | {r['tree']:.0f} | {r['cpsat_short']:.0f} | {r['greedy']:.0f} | "
-            f"{100 * r['tree_gap']:.2f}% | {100 * r['cpsat_short_gap']:.2f}% | {100 * r['tree_vs_reference']:+.2f}% |"
+            f"{_num(r['reference'])} | {_num(r['tree'])} | {_num(r['cpsat_short'])} | {_num(r['greedy'])} | "
+            f"{_pct(r['tree_gap'])} | {_pct(r['cpsat_short_gap'])} | {_pct(r['tree_vs_reference'], sign=True)} |"
         )
     opt = [r for r in rows if r["proven_optimal"]]
     lines.append("")
