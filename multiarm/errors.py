@@ -51,6 +51,7 @@ __all__ = [
     "SourceError",
     "TDLError",
     "TDLSyntaxError",
+    "Unreachable",
     "UsageError",
     "ValidationError",
 ]
@@ -228,6 +229,13 @@ class NoFeasibleSchedule(InfeasibleError):
 
 class PlanningFailed(InfeasibleError):
     """The motion planner found no collision-free path."""
+
+
+class Unreachable(InfeasibleError):
+    """An arm cannot reach a pose: out of its workspace, or only beyond a joint limit.
+
+    The message names the arm, the pose (or waypoint) and the reason.
+    """
 
 
 # -------------------------------------------------------------------- ours
