@@ -81,6 +81,10 @@ class FixedArrivals:
             raise ValidationError(f"fixed arrivals give no time for part {missing[0]!r}")
         return {p: table[p] for p in parts}
 
+    def expected(self, parts: Sequence[str]) -> dict[str, float]:
+        """Each part's expected arrival time: its fixed time."""
+        return self.sample(parts, np.random.default_rng(0))
+
 
 @dataclass(frozen=True, slots=True)
 class PoissonArrivals:
@@ -106,6 +110,25 @@ class PoissonArrivals:
         order = list(parts) if self.ordered else [parts[i] for i in rng.permutation(len(parts))]
         return {p: float(t) for p, t in zip(order, times, strict=True)}
 
+    def expected(self, parts: Sequence[str]) -> dict[str, float]:
+        """Each part's expected arrival time.
+
+        The k-th arrival (1-based) is expected at ``start + k / rate``; in
+        feeder order when ``ordered``, else every part is equally likely to
+        be any of the n arrivals, so each expects ``start + (n + 1) / (2 rate)``.
+
+        Examples
+        --------
+        >>> PoissonArrivals(2.0, start=1.0, ordered=True).expected(["a", "b"])
+        {'a': 1.5, 'b': 2.0}
+        >>> PoissonArrivals(2.0, start=1.0).expected(["a", "b"])
+        {'a': 1.75, 'b': 1.75}
+        """
+        n = len(parts)
+        if self.ordered:
+            return {p: self.start + (k + 1) / self.rate for k, p in enumerate(parts)}
+        return {p: self.start + (n + 1) / (2 * self.rate) for p in parts}
+
 
 @dataclass(frozen=True, slots=True)
 class UniformArrivals:
@@ -126,6 +149,10 @@ class UniformArrivals:
     def sample(self, parts: Sequence[str], rng: np.random.Generator) -> dict[str, float]:
         t = rng.uniform(self.low, self.high, size=len(parts))
         return {p: float(x) for p, x in zip(parts, t, strict=True)}
+
+    def expected(self, parts: Sequence[str]) -> dict[str, float]:
+        """Each part's expected arrival time: the middle of ``[low, high]``."""
+        return {p: (self.low + self.high) / 2 for p in parts}
 
 
 @dataclass(frozen=True, slots=True)
@@ -187,6 +214,10 @@ class TraceArrivals:
         if missing:
             raise ValidationError(f"arrival trace has no event for part {missing[0]!r}")
         return {p: table[p] for p in parts}
+
+    def expected(self, parts: Sequence[str]) -> dict[str, float]:
+        """Each part's arrival time in the trace (a trace is one known outcome)."""
+        return self.sample(parts, np.random.default_rng(0))
 
 
 ArrivalModel: TypeAlias = FixedArrivals | PoissonArrivals | UniformArrivals | TraceArrivals
@@ -277,3 +308,19 @@ class Feeder:
             out.append(PartArrival(p, self.id, times[p], (x, y, z)))
         out.sort(key=lambda a: (a.time, a.part))
         return tuple(out)
+
+    def expected(self) -> dict[str, float]:
+        """Each supplied part's expected arrival time (seconds), by part id.
+
+        Fixed and traced times are exact; a Poisson stream's k-th part is
+        expected at ``start + k / rate``; a uniform window's middle.
+
+        Examples
+        --------
+        >>> Feeder("tray", ("a", "b"), arrival=UniformArrivals(2.0, 4.0)).expected()
+        {'a': 3.0, 'b': 3.0}
+        """
+        try:
+            return self.arrival.expected(self.parts)
+        except ValidationError as exc:
+            raise ValidationError(f"feeder {self.id!r}: {exc}") from None

@@ -511,6 +511,14 @@ class TaskSet:
         out.sort(key=lambda a: (a.time, a.part))
         return tuple(out)
 
+    def expected_arrivals(self) -> dict[str, float]:
+        """Every fed part's expected arrival time (seconds), by part id
+        (see :meth:`tasklib.arrivals.Feeder.expected`)."""
+        out: dict[str, float] = {}
+        for f in self.feeders:
+            out.update(f.expected())
+        return out
+
     def summary(self) -> dict[str, Any]:
         """Counts for a quick look: tasks, parts, feeders, groups, steps,
         prerequisite depth, trajectories, waypoints, capabilities, tools."""

@@ -24,11 +24,11 @@ Examples
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from importlib import resources
 
 from multiarm.errors import ValidationError
-from multiarm.types import Seed, as_rng
+from multiarm.types import Point3, Seed, as_rng
 from tasklib import capi as c
 from tasklib.arrivals import FixedArrivals, PoissonArrivals, UniformArrivals
 from tasklib.model import TaskSet
@@ -289,6 +289,7 @@ def generate_taskset(
     tool_probability: float = 0.25,
     insert_probability: float = 0.3,
     capability_probability: float = 0.2,
+    sites: Sequence[tuple[Point3, Point3]] | None = None,
 ) -> TaskSet:
     """A random but valid part-driven task set with about ``n_tasks`` tasks.
 
@@ -306,6 +307,15 @@ def generate_taskset(
         Number of tasks, exactly (>= 1).
     seed : int or numpy.random.Generator
         The same seed gives the same task set.
+    sites : sequence of (feeder position, station position), optional
+        Where products are made in a concrete cell. Without it, each
+        product's tray lies uniformly in [-1.5, 1.5]^2 and its station in
+        [-0.5, 0.5]^2 around the origin, and every product shares the
+        trajectories ``to_station``/``to_out``; with it, each product picks
+        one site (uniformly), its tray and station are the site's, and its
+        moves follow the site's own trajectories ``to_site{k}`` (down onto
+        the station) and ``out_site{k}`` (back up), so a cell can place
+        arms that reach every site.
 
     Examples
     --------
@@ -318,11 +328,25 @@ def generate_taskset(
         raise ValidationError(f"generate_taskset needs n_tasks >= 1, got {n_tasks}")
     rng = as_rng(seed)
     ts = c.taskset_open(name or f"generated{n_tasks}", f"generated: {n_tasks} tasks")
-    c.tdl_add(
-        ts,
-        "trajectory to_station { taught { via (0, 0, 0.4) stop (0, 0, 0.2) } }\n"
-        "trajectory to_out { taught interp linear { via (0, 0, 0.4) stop (1.5, 0, 0.3) } }\n",
-    )
+    if sites is None:
+        c.tdl_add(
+            ts,
+            "trajectory to_station { taught { via (0, 0, 0.4) stop (0, 0, 0.2) } }\n"
+            "trajectory to_out { taught interp linear { via (0, 0, 0.4) stop (1.5, 0, 0.3) } }\n",
+        )
+    else:
+        if not sites:
+            raise ValidationError("generate_taskset needs at least one site")
+        lines = []
+        for k, (_, (sx, sy, sz)) in enumerate(sites):
+            lines.append(f"frame site{k} = ({sx!r}, {sy!r}, {sz!r})")
+            lines.append(
+                f"trajectory to_site{k} {{ frame site{k} taught {{ via (0, 0, 0.3) stop (0, 0, 0.15) }} }}"
+            )
+            lines.append(
+                f"trajectory out_site{k} {{ frame site{k} taught interp linear {{ stop (0, 0, 0.3) }} }}"
+            )
+        c.tdl_add(ts, "\n".join(lines) + "\n", "sites.tdl")
     count = 0
     product = 0
     while count < n_tasks:
@@ -331,16 +355,28 @@ def generate_taskset(
         n_parts = int(rng.integers(lo, hi + 1))
         parts = [f"p{product}_{i}" for i in range(n_parts)]
         parent = [-1] + [int(rng.integers(0, i)) for i in range(1, n_parts)]
-        fx, fy = float(rng.uniform(-1.5, 1.5)), float(rng.uniform(-1.5, 1.5))
+        if sites is None:
+            site = -1
+            fx, fy = float(rng.uniform(-1.5, 1.5)), float(rng.uniform(-1.5, 1.5))
+            fz = 0.02
+        else:
+            site = int(rng.integers(len(sites)))
+            fx, fy, fz = (float(v) for v in sites[site][0])
+        to_station = "to_station" if site < 0 else f"to_site{site}"
+        to_out = "to_out" if site < 0 else f"out_site{site}"
         c.feeder_add(
             ts,
             f"tray{product}",
             parts,
-            (fx, fy, 0.02),
+            (fx, fy, fz),
             PoissonArrivals(float(rng.uniform(0.2, 1.0)), start=float(rng.uniform(0, 30))),
             float(rng.choice([0.0, 0.0005, 0.002])),
         )
-        station = (float(rng.uniform(-0.5, 0.5)), float(rng.uniform(-0.5, 0.5)), 0.05)
+        if sites is None:
+            station = (float(rng.uniform(-0.5, 0.5)), float(rng.uniform(-0.5, 0.5)), 0.05)
+        else:
+            sx, sy, sz = (float(v) for v in sites[site][1])
+            station = (sx, sy, sz)
         last_of: dict[int, str] = {}
         children: dict[int, list[int]] = {}
         for i in range(1, n_parts):
@@ -360,11 +396,11 @@ def generate_taskset(
                 t = c.task_open(ts, tid, caps, tool, part=pid)
                 if j == 0:
                     c.task_consume(t, pid)
-                    c.task_move(t, (fx, fy, 0.15, *DOWN))
-                    c.task_approach(t, (fx, fy, 0.02, *DOWN), 0.1)
+                    c.task_move(t, (fx, fy, fz + 0.13, *DOWN))
+                    c.task_approach(t, (fx, fy, fz, *DOWN), 0.1)
                     c.task_grasp(t, pid, float(rng.uniform(0.2, 0.5)))
                     c.task_depart(t, 0.1)
-                    c.task_move(t, trajectory="to_station")
+                    c.task_move(t, trajectory=to_station)
                     if rng.random() < insert_probability:
                         c.task_insert(
                             t,
@@ -378,7 +414,7 @@ def generate_taskset(
                     c.task_release(t, pid)
                 else:
                     c.task_require(t, last_of[i])
-                    c.task_move(t, (station[0], station[1], 0.2, *DOWN))
+                    c.task_move(t, (station[0], station[1], station[2] + 0.15, *DOWN))
                     c.task_approach(t, (*station, *DOWN), 0.1)
                 if tool is not None:
                     c.task_use_tool(t, tool, float(rng.uniform(0.5, 3.0)))
@@ -396,7 +432,7 @@ def generate_taskset(
                 gid = f"g{product}_{p}"
                 c.group_add(ts, gid, [parts[k] for k in leaves])
                 t = c.task_open(ts, f"join{product}_{p}", group=gid)
-                c.task_move(t, (station[0], station[1], 0.2, *DOWN))
+                c.task_move(t, (station[0], station[1], station[2] + 0.15, *DOWN))
                 c.task_dwell(t, float(rng.uniform(0.5, 2.0)))
                 c.task_close(t)
                 count += 1
@@ -405,16 +441,24 @@ def generate_taskset(
             c.task_require(t, *[last_of[i] for i in sorted(last_of)])
             c.task_approach(t, (*station, *DOWN), 0.1)
             c.task_grasp(t)
-            c.task_move(t, trajectory="to_out")
+            c.task_move(t, trajectory=to_out)
             c.task_release(t)
             c.task_close(t)
             count += 1
     return c.taskset_close(ts)
 
 
+CELL8_SITES: tuple[tuple[Point3, Point3], ...] = tuple(
+    ((x - 0.1, 1.1, 0.05), (x + 0.1, 0.92, 0.05)) for x in (0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5)
+)
+"""The 8-arm cell's work sites on its central conveyor (y = 0.8..1.2 m, x = 0..4 m):
+(tray, station) pairs every half metre, each within reach of the arms of both
+rows standing next to it."""
+
+
 def cell8() -> TaskSet:
-    """About 200 generated tasks for the 8-arm scale cell (seed 8)."""
-    return generate_taskset(200, seed=8, name="cell8")
+    """200 generated tasks for the 8-arm scale cell (seed 8), made at :data:`CELL8_SITES`."""
+    return generate_taskset(200, seed=8, name="cell8", sites=CELL8_SITES)
 
 
 EXAMPLES: dict[str, Callable[[], TaskSet]] = {

@@ -54,3 +54,21 @@ def test_cell8_is_about_200_tasks(cell8_tasks: TaskSet) -> None:
 def test_unknown_example() -> None:
     with pytest.raises(ValidationError, match="unknown example 'nope'"):
         load_example("nope")
+
+
+def test_generated_sites_place_every_product_at_a_site() -> None:
+    from tasklib.examples import CELL8_SITES, generate_taskset
+
+    ts = generate_taskset(60, seed=3, sites=CELL8_SITES)
+    trays = {f.position for f in ts.feeders}
+    assert trays <= {tuple(float(v) for v in f) for f, _ in CELL8_SITES}
+    moves = {name for t in ts.tasks for name in t.trajectories()}
+    assert moves and all(m.startswith(("to_site", "out_site")) for m in moves)
+
+
+def test_expected_arrivals_follow_each_model(cell8_tasks: TaskSet) -> None:
+    ts = load_example("scara4")
+    exp = ts.expected_arrivals()
+    assert exp["housing1"] == 10.0  # uniform on [0, 20]
+    assert exp["cover1"] == 15.0 and exp["cover2"] == 25.0  # ordered Poisson, rate 0.1 from 5 s
+    assert set(cell8_tasks.expected_arrivals()) == {p for f in cell8_tasks.feeders for p in f.parts}
