@@ -45,7 +45,7 @@ from typing import Any, Literal, Union, get_args, get_origin
 
 import tomli_w
 
-from multiarm.errors import FormatError, ValidationError
+from multiarm.errors import FormatError, SourceError, ValidationError
 from tasklib.arrivals import ARRIVAL_MODELS, Feeder
 from tasklib.model import Part, PartGroup, Task, TaskSet
 from tasklib.pose import Pose
@@ -326,6 +326,9 @@ def load_taskset(path: str | PathLike[str]) -> TaskSet:
         raise FormatError(f"TOML syntax error: {exc}", filename=name) from None
     try:
         return taskset_from_dict(data, filename=name)
+    except SourceError:
+        raise
     except ValidationError as exc:
-        exc.add_note(f"while loading the task set {name}")
+        # Found after parsing (a cycle, a duplicate id, ...): name the file too.
+        exc.args = (f"{name}: {exc.args[0]}", *exc.args[1:])
         raise
