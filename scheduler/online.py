@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from multiarm.errors import UsageError
+from scheduler.kernel import compiled
 from scheduler.problem import Problem
 from scheduler.result import Result, SearchStats, SolveStatus
 from scheduler.schedule import Schedule, validate
@@ -127,7 +128,7 @@ def reschedule(
     """
     t0 = time.perf_counter()
     p = problem
-    inst = p.instance
+    inst = compiled(p)
     now = float(state.time)
     frozen: dict[int, tuple[int, float, float, np.ndarray]] = {}
     for ref, entry in state.done.items():

@@ -52,7 +52,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from os import PathLike
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
+from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -61,9 +61,6 @@ from multiarm.graph import find_cycle
 from multiarm.types import BoolArray, FloatArray, IntArray
 from scheduler.setup import BoundSetup, NoSetup, Setup, setup_from_dict
 from scheduler.timing import Shapes
-
-if TYPE_CHECKING:
-    from scheduler.kernel import Instance
 
 __all__ = ["BlockingOracle", "Model", "Problem", "Window", "load_problem", "save_problem"]
 
@@ -233,13 +230,6 @@ class Problem:
     def shapes(self) -> Shapes:
         """Per-mode timing structure (:mod:`scheduler.timing`), computed once."""
         return Shapes(self)
-
-    @cached_property
-    def instance(self) -> Instance:
-        """The problem compiled for the placement kernel (:mod:`scheduler.kernel`)."""
-        from scheduler.kernel import Instance
-
-        return Instance(self)
 
     def setup_time(self, arm: int, prev: int, nxt: int) -> float:
         """Travel time of ``arm`` from the end of task ``prev`` (-1: its initial

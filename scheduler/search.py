@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from multiarm.types import FloatArray, IntArray
-from scheduler.kernel import EPS, State, decode, to_schedule
+from scheduler.kernel import EPS, State, compiled, decode, to_schedule
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
 
@@ -120,7 +120,7 @@ class Evaluator:
         frozen: frozenset[int] = frozenset(),
     ) -> None:
         self.problem = problem
-        self.inst = problem.instance
+        self.inst = compiled(problem)
         self.waits = waits
         self.blocking = problem.blocking is not None
         self.chrono = self.blocking if chronological is None else (chronological or self.blocking)

@@ -13,6 +13,11 @@ the arm's initial pose.
 * :class:`TravelSetup`: distances between mode end and start points divided
   by the arm's speed, plus a fixed time per move — computed on demand.
 * :class:`FunctionSetup`: any Python callable, cached per row.
+
+:meth:`Setup.kernel_data` hands the placement kernel (:mod:`scheduler.kernel`)
+what it needs as a :class:`KernelSetup`: a compact table of the pairs each
+arm can actually take (from its initial pose or one of its tasks to one of
+its tasks), never a dense ``(A, T + 1, T)`` table.
 """
 
 from __future__ import annotations
@@ -20,12 +25,12 @@ from __future__ import annotations
 import math
 from collections import OrderedDict
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 
 import numpy as np
 
 from multiarm.errors import UsageError, ValidationError
-from multiarm.types import FloatArray
+from multiarm.types import FloatArray, IntArray
 
 if TYPE_CHECKING:
     from scheduler.problem import Problem
@@ -33,12 +38,77 @@ if TYPE_CHECKING:
 __all__ = [
     "BoundSetup",
     "FunctionSetup",
+    "KernelSetup",
     "MatrixSetup",
     "NoSetup",
     "Setup",
     "TravelSetup",
     "setup_from_dict",
 ]
+
+
+class KernelSetup(NamedTuple):
+    """Setup times as the placement kernel reads them: a compact table.
+
+    For each arm ``a``, a block of ``arm_count[a] + 1`` rows (from its
+    initial pose, then from the end of each of its modes, in mode order) of
+    ``arm_count[a]`` entries (to the start of each of its modes): only pairs
+    the arm can take, never a dense ``(A, T + 1, T)`` table.
+
+    Travel setups are packed instead (kinds 2 and 3): ``table`` holds the
+    mode start points (M, 3), end points (M, 3), home points (A, 3), speeds
+    (A,) and fixed times (A,), flattened, and the kernel computes each travel
+    time as :class:`TravelSetup` does.
+
+    Attributes
+    ----------
+    kind : int
+        0: no setup (nothing read); 1: the table; 2, 3: travel, Euclidean or
+        Manhattan.
+    table : (sum of arm_count * (arm_count + 1),) float, seconds
+    arm_off : (A,) int
+        Where arm ``a``'s block starts.
+    arm_count : (A,) int
+        How many modes arm ``a`` has.
+    mode_slot : (M,) int
+        Each mode's rank among its arm's modes.
+    """
+
+    kind: int
+    table: FloatArray
+    arm_off: IntArray
+    arm_count: IntArray
+    mode_slot: IntArray
+
+
+def _layout(problem: Problem) -> tuple[IntArray, IntArray, IntArray, list[IntArray]]:
+    """Per arm: block offsets, mode counts, each mode's slot, and the arm's modes."""
+    A, M = problem.n_arms, problem.n_modes
+    mode_arm = np.asarray(problem.mode_arm, dtype=np.int64)
+    count = np.bincount(mode_arm, minlength=A).astype(np.int64)
+    off = np.zeros(A, dtype=np.int64)
+    off[1:] = np.cumsum(count * (count + 1))[:-1]
+    slot = np.zeros(M, dtype=np.int64)
+    modes = [np.flatnonzero(mode_arm == a) for a in range(A)]
+    for a in range(A):
+        slot[modes[a]] = np.arange(len(modes[a]))
+    return off, count, slot, modes
+
+
+def _table_setup(
+    problem: Problem, block: Callable[[int, IntArray], FloatArray] | None
+) -> KernelSetup:
+    """A :class:`KernelSetup` whose arm blocks come from ``block(arm, modes)``,
+    shape (len(modes) + 1, len(modes)); ``None``: no setup (kind 0)."""
+    off, count, slot, modes = _layout(problem)
+    if block is None:
+        return KernelSetup(0, np.zeros(1), off, count, slot)
+    table = np.zeros(max(int((count * (count + 1)).sum()), 1))
+    for a, ms in enumerate(modes):
+        n = len(ms)
+        if n:
+            table[off[a] : off[a] + (n + 1) * n] = np.asarray(block(a, ms), dtype=float).ravel()
+    return KernelSetup(1, table, off, count, slot)
 
 
 class BoundSetup:
@@ -158,6 +228,31 @@ class Setup:
     def bind(self, problem: Problem) -> BoundSetup:
         raise NotImplementedError
 
+    def kernel_data(self, problem: Problem) -> KernelSetup:
+        """The setup times of ``problem`` for the placement kernel.
+
+        This default reads the problem's cached rows (:meth:`BoundSetup.row`)
+        into the compact table: for each arm, from its initial pose and from
+        each task it can do, to each task it can do.
+
+        Parameters
+        ----------
+        problem : Problem
+            The problem this setup belongs to.
+
+        Returns
+        -------
+        KernelSetup
+        """
+        tasks_of = np.asarray(problem.mode_task)
+
+        def block(a: int, modes: IntArray) -> FloatArray:
+            tasks = tasks_of[modes]
+            rows = [problem.setup_row(a, int(prev))[tasks] for prev in (-1, *tasks.tolist())]
+            return np.array(rows, dtype=float)
+
+        return _table_setup(problem, block)
+
     def to_dict(self) -> dict[str, Any]:
         raise NotImplementedError
 
@@ -167,6 +262,10 @@ class NoSetup(Setup):
 
     def bind(self, problem: Problem) -> BoundSetup:
         return BoundSetup(problem, lambda a, p: np.zeros(problem.n_tasks), zero=True)
+
+    def kernel_data(self, problem: Problem) -> KernelSetup:
+        """No setup: kind 0, nothing stored (see :meth:`Setup.kernel_data`)."""
+        return _table_setup(problem, None)
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": "none"}
@@ -189,6 +288,17 @@ class MatrixSetup(Setup):
                 f"setup matrix must have shape {(A, T + 1, T)}, got {self.times.shape}"
             )
         return BoundSetup(problem, lambda a, p: self.times[a, p + 1])
+
+    def kernel_data(self, problem: Problem) -> KernelSetup:
+        """The matrix entries the arms can use (see :meth:`Setup.kernel_data`)."""
+        tasks_of = np.asarray(problem.mode_task)
+
+        def block(a: int, modes: IntArray) -> FloatArray:
+            tasks = tasks_of[modes]
+            out: FloatArray = self.times[a][np.concatenate([[0], tasks + 1])][:, tasks]
+            return out
+
+        return _table_setup(problem, block)
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": "matrix", "times": self.times.tolist()}
@@ -283,6 +393,24 @@ class TravelSetup(Setup):
             return float(base[a] + d / speed[a])
 
         return BoundSetup(problem, row, min_in_fn=min_in, time_fn=one)
+
+    def kernel_data(self, problem: Problem) -> KernelSetup:
+        """The points, speeds and fixed times packed for the kernel, which
+        computes each travel time as :meth:`bind` does (kind 2 Euclidean, 3
+        Manhattan; see :class:`KernelSetup`): no table to build or to read
+        from memory."""
+        A = problem.n_arms
+        off, count, slot, _modes = _layout(problem)
+        packed = np.concatenate(
+            [
+                self.start.ravel(),
+                self.end.ravel(),
+                self.home.ravel(),
+                np.broadcast_to(self.speed, (A,)),
+                np.broadcast_to(self.base, (A,)),
+            ]
+        ).astype(float)
+        return KernelSetup(3 if self.metric == "manhattan" else 2, packed, off, count, slot)
 
     def to_dict(self) -> dict[str, Any]:
         return {

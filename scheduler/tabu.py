@@ -34,7 +34,7 @@ from collections.abc import Callable
 import numpy as np
 
 from multiarm.types import FloatArray, IntArray
-from scheduler.kernel import State, seq_decode
+from scheduler.kernel import State, compiled, seq_decode
 from scheduler.problem import Problem
 from scheduler.search import Budget, Evaluator, Solution
 
@@ -67,7 +67,7 @@ def critical_chain(
         return []
     start, end, mode = st.t_start, st.t_end, st.t_mode
     arm = p.mode_arm[mode]
-    inst = p.instance
+    inst = compiled(p)
     prev = np.full(T, -1, dtype=np.int64)
     for a in range(p.n_arms):
         n = int(st.arm_n[a])

@@ -12,7 +12,7 @@ import numpy as np
 
 from scheduler import Model, Window, validate
 from scheduler.generate import random_problem
-from scheduler.kernel import decode, expand, jit_enabled, to_schedule
+from scheduler.kernel import compiled, decode, expand, jit_enabled, to_schedule
 from scheduler.search import Evaluator, priority_order
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -21,16 +21,32 @@ SCRIPT = """
 import json, sys
 import numpy as np
 from scheduler.generate import random_problem
-from scheduler.kernel import decode, to_schedule, jit_enabled
+from scheduler.kernel import compiled, decode, expand_blocking, seq_decode, to_schedule, jit_enabled
 from scheduler.search import priority_order
 out = []
 for seed in range(6):
-    p = random_problem(4, 40, 5, 2, seed=seed, start_zones=True)
+    # seeds 3..5 carry the generator's blocking oracle (chronological decoding with detours)
+    p = random_problem(4, 40, 5, 2, seed=seed, start_zones=True, blocking=seed >= 3)
+    inst = compiled(p)
     order = priority_order(p)
     for waits in (True, False):
-        code, st = decode(p.instance, order, np.full(p.n_tasks, -1), waits=waits)
-        s = to_schedule(p.instance, st)
-        out.append([code, s.mode.tolist(), s.start.tolist(), [w.tolist() for w in s.waits]])
+        code, st = decode(inst, order, np.full(p.n_tasks, -1), waits=waits)
+        s = to_schedule(inst, st)
+        out.append([code, s.mode.tolist(), s.start.tolist(), [w.tolist() for w in s.waits],
+                    s.blocking.tolist()])
+    seqs = np.zeros((p.n_arms, p.n_tasks), dtype=np.int64)
+    n = np.zeros(p.n_arms, dtype=np.int64)
+    for t in np.argsort(st.t_start, kind="stable"):
+        a = int(p.mode_arm[st.t_mode[t]])
+        seqs[a, n[a]] = t
+        n[a] += 1
+    ok, st2, o = seq_decode(inst, seqs, n, st.t_mode.copy())
+    out.append([ok, st2.t_start.tolist(), o.tolist()])
+    if p.blocking is not None:
+        _c, part = decode(inst, order[:10], np.full(p.n_tasks, -1))
+        ct = np.repeat(order[10:20], 1)
+        cm = np.array([p.task_modes[t][0] for t in ct])
+        out.append([x.tolist() for x in expand_blocking(inst, part, ct, cm)])
 print(json.dumps({"jit": jit_enabled(), "out": out}))
 """
 
@@ -61,9 +77,9 @@ def test_decoded_schedules_validate_and_use_waits() -> None:
     used_waits = 0
     for seed in range(15):
         p = random_problem(4, 60, 6, 2, seed=seed, start_zones=seed % 2 == 0)
-        code, st = decode(p.instance, priority_order(p), np.full(p.n_tasks, -1))
+        code, st = decode(compiled(p), priority_order(p), np.full(p.n_tasks, -1))
         assert code == 0
-        s = to_schedule(p.instance, st)
+        s = to_schedule(compiled(p), st)
         validate(p, s)
         used_waits += s.total_wait() > 0
     assert used_waits > 0  # the kernel does wait at borders when it helps
@@ -81,9 +97,9 @@ def test_blocked_tasks_are_deferred_until_a_start_zone_frees() -> None:
     m.add_task("b_work")
     m.add_mode("b_work", "B", 5.0)
     p = m.build()
-    code, st = decode(p.instance, np.array([0, 1]), np.full(2, -1))
+    code, st = decode(compiled(p), np.array([0, 1]), np.full(2, -1))
     assert code == 0
-    s = to_schedule(p.instance, st)
+    s = to_schedule(compiled(p), st)
     assert validate(p, s) == 5.0 and s.start[0] == 0.0  # B leaves E at 0 for its task
     # an arm that never leaves keeps the zone for good: nothing can be placed there
     m2 = Model()
@@ -93,7 +109,7 @@ def test_blocked_tasks_are_deferred_until_a_start_zone_frees() -> None:
     m2.add_task("need_e")
     m2.add_mode("need_e", "A", 2.0, windows=[Window("E", 0.0, 2.0)])
     p2 = m2.build()
-    code, _ = decode(p2.instance, np.array([0]), np.full(1, -1))
+    code, _ = decode(compiled(p2), np.array([0]), np.full(1, -1))
     assert code == -1
 
 
@@ -107,8 +123,8 @@ def test_expand_matches_single_placements() -> None:
             for m in p.task_modes[t]:
                 cand_t.append(t)
                 cand_m.append(m)
-    S, end, k, _w, waits = expand(p.instance, st, np.array(cand_t), np.array(cand_m))
+    S, end, k, _w, waits = expand(compiled(p), st, np.array(cand_t), np.array(cand_m))
     for i, (t, m) in enumerate(zip(cand_t, cand_m, strict=True)):
-        S1, e1, k1, waits1 = p.instance.query(st, t, m, p.instance.earliest(st, t, False))
+        S1, e1, k1, waits1 = compiled(p).query(st, t, m, compiled(p).earliest(st, t, False))
         assert (S1, e1, k1) == (S[i], end[i], k[i])
         assert np.allclose(waits1, waits[i][: len(waits1)])

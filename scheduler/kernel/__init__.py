@@ -1,0 +1,79 @@
+"""The hot path: placing tasks on arm and resource timelines, compiled by numba.
+
+The kernel is a small package, one job per module:
+
+* :mod:`~scheduler.kernel.compile`: a :class:`~scheduler.problem.Problem`
+  compiled into flat arrays bundled in typed tuples (:class:`Arrays`,
+  :class:`State`, ...) and wrapped in an :class:`Instance`, built once per
+  problem by :func:`compiled` and cached here;
+* :mod:`~scheduler.kernel.place`: the earliest placement of one task on the
+  arm gaps and the zone and tool timelines (waits at zone borders, start
+  zones, the blocking oracle's detours);
+* :mod:`~scheduler.kernel.passes`: whole passes (list decoding, batched
+  queries, arm-sequence decoding), with their Python entry points in
+  :mod:`~scheduler.kernel.api`;
+* :mod:`~scheduler.kernel.build`: the :class:`~scheduler.schedule.Schedule`
+  of a complete state.
+
+``MULTIARM_NO_JIT=1`` (or ``NUMBA_DISABLE_JIT=1``) runs the same code as
+plain Python, which ``benchmarks/bench_kernel.py`` uses to measure what the
+compilation buys. The first compile takes tens of seconds once per machine
+(numba's on-disk cache keeps it); :func:`warm_up` does it up front and
+announces it, so that solvers can start their clock afterwards.
+
+With a blocking oracle, its answers live in an array
+(:class:`OracleTable`) the compiled decoders read; unknown answers are asked
+from Python between passes, and a cell may pre-fill the table
+(:meth:`Instance.prefill_blocking`, or a ``table()`` method on the oracle).
+
+Examples
+--------
+>>> import numpy as np
+>>> from scheduler.generate import random_problem
+>>> p = random_problem(3, 12, 2, 1, seed=0)
+>>> inst = compiled(p)
+>>> code, st = decode(inst, np.arange(p.n_tasks), np.full(p.n_tasks, -1))
+>>> code, bool(np.all(st.t_mode >= 0))
+(0, True)
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from scheduler.kernel import passes as _passes
+from scheduler.kernel import place as _place
+from scheduler.kernel._jit import EPS, INF, drop_stale_cache, jit_enabled
+from scheduler.kernel.api import (
+    decode,
+    expand,
+    expand_blocking,
+    place_blocking,
+    seq_decode,
+    warm_up,
+)
+from scheduler.kernel.build import to_schedule
+from scheduler.kernel.compile import Arrays, Ctx, Instance, OracleTable, Scratch, State, compiled
+
+drop_stale_cache((_passes._decode, _place._query), [Path(_place.__file__), Path(_passes.__file__)])
+
+__all__ = [
+    "EPS",
+    "INF",
+    "Arrays",
+    "Ctx",
+    "Instance",
+    "OracleTable",
+    "Scratch",
+    "State",
+    "compiled",
+    "decode",
+    "drop_stale_cache",
+    "expand",
+    "expand_blocking",
+    "jit_enabled",
+    "place_blocking",
+    "seq_decode",
+    "to_schedule",
+    "warm_up",
+]

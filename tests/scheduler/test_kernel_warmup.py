@@ -1,0 +1,74 @@
+"""The one-time compile: announced once, before it starts, and never again;
+stale machine code of an edited kernel file is never loaded."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import pytest
+
+from scheduler.kernel import api, drop_stale_cache, jit_enabled, warm_up
+
+
+def test_a_compile_is_announced_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    assert jit_enabled()
+    monkeypatch.setattr(api, "_WARM", False)
+    monkeypatch.setattr(api, "_cached_on_disk", lambda: False)
+    said: list[str] = []
+    spent = warm_up(said.append)
+    assert said == ["compiling the scheduler kernel (one time, ~20 s)..."]
+    assert spent > 0.0
+    assert warm_up(said.append) == 0.0 and len(said) == 1
+
+
+def test_the_default_announcement_is_a_log_message(
+    monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    monkeypatch.setattr(api, "_WARM", False)
+    monkeypatch.setattr(api, "_cached_on_disk", lambda: False)
+    with caplog.at_level(logging.INFO, logger="scheduler.kernel"):
+        warm_up()
+    assert [r.getMessage() for r in caplog.records if r.levelno == logging.INFO] == [
+        "compiling the scheduler kernel (one time, ~20 s)..."
+    ]
+
+
+def test_a_cached_kernel_is_loaded_silently(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(api, "_WARM", False)
+    monkeypatch.setattr(api, "_cached_on_disk", lambda: True)
+    said: list[str] = []
+    warm_up(said.append)
+    assert said == []
+
+
+class _Cache:
+    def __init__(self, path: Path) -> None:
+        self._cache_path = str(path)
+
+
+class _Dispatcher:
+    def __init__(self, path: Path) -> None:
+        self._cache = _Cache(path)
+
+
+def test_stale_machine_code_of_an_edited_kernel_file_is_dropped(tmp_path: Path) -> None:
+    src = [tmp_path / "place.py", tmp_path / "passes.py"]
+    src[0].write_text("x = 1\n")
+    src[1].write_text("y = 2\n")
+    cache = tmp_path / "__pycache__"
+    cache.mkdir()
+    files = [cache / "passes._decode-38.py311.nbi", cache / "passes._decode-38.py311.1.nbc"]
+    other = cache / "unrelated.f-1.py311.nbi"
+    for f in (*files, other):
+        f.write_bytes(b"0")
+    d = [_Dispatcher(cache)]
+    assert drop_stale_cache(d, src)  # no digest yet: dropped
+    assert not any(f.exists() for f in files) and other.exists()
+    for f in files:
+        f.write_bytes(b"0")
+    assert not drop_stale_cache(d, src)  # unchanged sources: kept
+    assert all(f.exists() for f in files)
+    src[0].write_text("x = 3\n")  # an edit of the placement code drops the passes too
+    assert drop_stale_cache(d, src)
+    assert not any(f.exists() for f in files)
