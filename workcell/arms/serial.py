@@ -1,0 +1,384 @@
+"""A generic serial arm from Denavit-Hartenberg parameters, with numerical IK.
+
+Standard DH: frame ``i`` follows frame ``i-1`` by ``Rz(theta_i) Tz(d_i)
+Tx(a_i) Rx(alpha_i)``; a revolute joint adds ``q_i`` to ``theta_i``, a
+prismatic one to ``d_i``. The flange is the last frame. Collision shapes
+are capsules from each frame's origin back to the previous one (drawn in
+the later frame, where the segment does not depend on the joint angle) and a
+sphere at the base.
+
+The inverse kinematics is Levenberg-Marquardt (damped least squares with
+adaptive damping) on the position and orientation (rotation vector) error
+with the geometric Jacobian, started from the hint, then the home pose, then
+fixed pseudo-random starts (deterministic), joint limits enforced by
+clipping at every step; the loop is compiled with numba. Points beyond the
+arm's reach from its shoulder are refused at once.
+
+Examples
+--------
+>>> import numpy as np
+>>> arm = SerialArm.example_6dof("r1")
+>>> q = np.array([0.3, -0.4, 0.6, 0.2, -0.8, 0.5])
+>>> sol = arm.ik(arm.fk(q[None])[0], q + 0.1)
+>>> bool(np.allclose(arm.fk(sol[None])[0], arm.fk(q[None])[0], atol=1e-8))
+True
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+
+import numpy as np
+from numba import njit
+
+from multiarm.errors import Unreachable, ValidationError
+from multiarm.types import FloatArray, JointVector, Transform
+from workcell.arms._common import DriveArm
+from workcell.arms.base import JointKind, LinkShape
+from workcell.arms.profiles import ServoDrive
+
+__all__ = ["SerialArm"]
+
+IK_TOL = 1e-9
+"""IK convergence: position error (metres) and orientation error (radians)."""
+
+IK_RESTARTS = 16
+"""Pseudo-random starts (fixed seed) tried after the hint and the home pose."""
+
+IK_ITERATIONS = 100
+"""Levenberg-Marquardt iterations per start."""
+
+IK_LENGTH = 0.3
+"""Metres per radian weighing the orientation error against the position error."""
+
+
+def _capsule_between(name: str, frame: int, p: FloatArray, r: float) -> LinkShape | None:
+    """A capsule from the frame's origin to point ``p`` (in that frame)."""
+    length = float(np.linalg.norm(p))
+    if length < 1e-6:
+        return None
+    z = p / length
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    off = np.eye(4)
+    off[:3, 0], off[:3, 1], off[:3, 2], off[:3, 3] = x, y, z, p / 2
+    return LinkShape(name, "capsule", (r, length), frame, off)
+
+
+class SerialArm(DriveArm):
+    """A serial arm from standard DH parameters (module docstring).
+
+    Parameters
+    ----------
+    name : str
+    dh : (n, 4) float
+        Rows ``(a, alpha, d, theta_offset)``.
+    kinds : sequence of {"revolute", "prismatic"}
+    joint_limits : (n, 2) float
+    base : (4, 4) float
+    max_velocity, max_acceleration : (n,) float
+    max_jerk : (n,) float, optional
+    radius : float
+        Radius of the link capsules.
+    """
+
+    kind = "serial"
+    interpolation = "sync"
+
+    def __init__(
+        self,
+        name: str,
+        *,
+        dh: Sequence[Sequence[float]],
+        kinds: Sequence[JointKind] | None = None,
+        joint_limits: Sequence[Sequence[float]] | None = None,
+        base: Transform | None = None,
+        max_velocity: Sequence[float] | None = None,
+        max_acceleration: Sequence[float] | None = None,
+        max_jerk: Sequence[float] | None = None,
+        radius: float = 0.05,
+        capabilities: Iterable[str] = ("gripper",),
+        tools: Iterable[str] = (),
+        payload: float = 5.0,
+        home: JointVector | None = None,
+    ) -> None:
+        self.name = name
+        table = np.array(dh, dtype=float)
+        if table.ndim != 2 or table.shape[1] != 4 or len(table) == 0:
+            raise ValidationError(f"serial arm {name!r}: dh must be rows of (a, alpha, d, offset)")
+        if not np.all(np.isfinite(table)):
+            raise ValidationError(f"serial arm {name!r}: dh parameters must be finite")
+        n = len(table)
+        self.dh = table
+        revolute: JointKind = "revolute"
+        self.joint_kinds = tuple(kinds) if kinds is not None else (revolute,) * n
+        if len(self.joint_kinds) != n or any(
+            k not in ("revolute", "prismatic") for k in self.joint_kinds
+        ):
+            raise ValidationError(
+                f"serial arm {name!r}: kinds must be {n} of 'revolute'/'prismatic'"
+            )
+        self.joint_names = tuple(f"j{i + 1}" for i in range(n))
+        lim = (
+            np.array(joint_limits, dtype=float)
+            if joint_limits is not None
+            else np.array([[-math.pi, math.pi]] * n)
+        )
+        if lim.shape != (n, 2) or not np.all(lim[:, 0] < lim[:, 1]):
+            raise ValidationError(
+                f"serial arm {name!r}: joint_limits must be {n} (low < high) pairs"
+            )
+        self.joint_limits = lim
+        self.base = np.eye(4) if base is None else np.array(base, dtype=float)
+        self.base_inv = np.linalg.inv(self.base)
+        vel = list(max_velocity) if max_velocity is not None else [2.0] * n
+        acc = list(max_acceleration) if max_acceleration is not None else [8.0] * n
+        jerk = list(max_jerk) if max_jerk is not None else [None] * n
+        if not (len(vel) == len(acc) == len(jerk) == n):
+            raise ValidationError(f"serial arm {name!r}: limits need one value per joint ({n})")
+        self.drives = tuple(
+            ServoDrive(float(v), float(a), None if j is None else float(j))
+            for v, a, j in zip(vel, acc, jerk, strict=True)
+        )
+        self.capabilities = frozenset(capabilities)
+        self.tools = tuple(tools)
+        self.payload = float(payload)
+        r = float(radius)
+        shapes = [LinkShape("base", "sphere", (r * 1.6,), 0, np.eye(4))]
+        for i in range(n):
+            a, alpha, d, _ = table[i]
+            if self.joint_kinds[i] == "prismatic":
+                continue
+            # origin of frame i seen from frame i+1: Rx(-alpha) (-a, 0, -d)
+            ca, sa = math.cos(alpha), math.sin(alpha)
+            p = np.array([-a, -d * sa, -d * ca])
+            cap = _capsule_between(f"link{i + 1}", i + 1, p, r)
+            if cap is not None:
+                shapes.append(cap)
+        shapes.append(LinkShape("hand", "sphere", (r,), n, np.eye(4)))
+        self.shapes = tuple(shapes)
+        self.allowed_pairs = frozenset(
+            frozenset({shapes[k].name, shapes[k + 1].name}) for k in range(len(shapes) - 1)
+        )
+        self.home = np.zeros(n) if home is None else np.array(home, dtype=float)
+        if self.home.shape != (n,) or not bool(self.within_limits(self.home[None])[0]):
+            raise ValidationError(
+                f"serial arm {name!r}: home {self.home.tolist()} is outside its limits"
+            )
+        self._reach = self._reaches()
+        # no flange pose is farther from the shoulder point (0, 0, d1) than this
+        lengths = np.hypot(self.dh[:, 0], self.dh[:, 2])
+        self._shoulder = (self.base @ np.array([0.0, 0.0, self.dh[0, 2], 1.0]))[:3]
+        self._max_reach = abs(float(self.dh[0, 0])) + float(lengths[1:].sum()) + 1e-9
+        if self.joint_kinds[0] == "prismatic" or any(
+            k == "prismatic" for k in self.joint_kinds[1:]
+        ):
+            self._max_reach = math.inf  # prismatic travel: no simple bound
+
+    @classmethod
+    def example_6dof(cls, name: str, base: Transform | None = None, **kw: object) -> SerialArm:
+        """An anthropomorphic 6-DOF arm with a spherical wrist (about 0.9 m reach)."""
+        half = math.pi / 2
+        dh = [
+            (0.0, half, 0.40, 0.0),
+            (0.45, 0.0, 0.0, half),
+            (0.05, half, 0.0, 0.0),
+            (0.0, -half, 0.42, 0.0),
+            (0.0, half, 0.0, 0.0),
+            (0.0, 0.0, 0.10, 0.0),
+        ]
+        lim = [
+            (-math.radians(170), math.radians(170)),
+            (-math.radians(120), math.radians(120)),
+            (-math.radians(150), math.radians(150)),
+            (-math.radians(185), math.radians(185)),
+            (-math.radians(125), math.radians(125)),
+            (-math.radians(350), math.radians(350)),
+        ]
+        defaults: dict[str, object] = {
+            "max_velocity": (2.5, 2.5, 3.0, 5.0, 5.0, 7.0),
+            "max_acceleration": (8.0, 8.0, 10.0, 20.0, 20.0, 30.0),
+            "home": (0.0, 0.3, 0.9, 0.0, 1.2, 0.0),
+            "capabilities": ("gripper",),
+        }
+        defaults.update(kw)
+        return cls(name, dh=dh, joint_limits=lim, base=base, **defaults)  # type: ignore[arg-type]
+
+    # ------------------------------------------------------- kinematics
+    def _joint_transforms(self, q: FloatArray) -> FloatArray:
+        """(N, n, 4, 4): each joint's DH transform."""
+        n = len(self.dh)
+        a, alpha, d, off = (self.dh[:, k] for k in range(4))
+        prism = np.array([k == "prismatic" for k in self.joint_kinds])
+        theta = off + np.where(prism, 0.0, q)
+        dd = d + np.where(prism, q, 0.0)
+        ct, st = np.cos(theta), np.sin(theta)
+        ca, sa = np.cos(alpha), np.sin(alpha)
+        out = np.zeros((len(q), n, 4, 4))
+        out[..., 0, 0], out[..., 0, 1], out[..., 0, 2] = ct, -st * ca, st * sa
+        out[..., 1, 0], out[..., 1, 1], out[..., 1, 2] = st, ct * ca, -ct * sa
+        out[..., 2, 1], out[..., 2, 2] = sa, ca
+        out[..., 0, 3], out[..., 1, 3], out[..., 2, 3] = a * ct, a * st, dd
+        out[..., 3, 3] = 1.0
+        return out
+
+    def frames(self, q: FloatArray) -> FloatArray:
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        jt = self._joint_transforms(q)
+        n = len(self.dh)
+        out = np.empty((len(q), n + 1, 4, 4))
+        out[:, 0] = self.base
+        for i in range(n):
+            out[:, i + 1] = out[:, i] @ jt[:, i]
+        return out
+
+    def _reaches(self) -> FloatArray:
+        """Per joint, a bound on the distance of distal shape points from its axis,
+        over the whole joint space (sum of the distal link lengths plus radii)."""
+        n = len(self.dh)
+        lengths = np.hypot(self.dh[:, 0], self.dh[:, 2])
+        rmax = max(s.radius() for s in self.shapes)
+        out = np.empty(n)
+        for i in range(n):
+            if self.joint_kinds[i] == "prismatic":
+                out[i] = 1.0
+            else:
+                # joint i turns about z of frame i-1: everything from frame i on
+                out[i] = float(lengths[i:].sum()) + rmax
+        return out
+
+    def displacement_bound(self, dq: FloatArray) -> FloatArray:
+        out: FloatArray = np.abs(np.atleast_2d(dq)) @ self._reach
+        return out
+
+    def ik(self, pose: Transform, q_hint: JointVector | None = None) -> JointVector:
+        target = np.asarray(pose, dtype=float)
+        if target.shape != (4, 4) or not np.all(np.isfinite(target)):
+            raise ValidationError(f"arm {self.name!r}: a pose must be a finite (4, 4) transform")
+        lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
+        n = len(self.dh)
+        dist = float(np.linalg.norm(target[:3, 3] - self._shoulder))
+        if dist > self._max_reach:
+            raise Unreachable(
+                f"arm {self.name!r}: the point is {dist:.4g} m from the shoulder, beyond the "
+                f"reach {self._max_reach:.4g} m"
+            )
+        first = self.home if q_hint is None else np.asarray(q_hint, dtype=float)
+        rng = np.random.default_rng(12345)
+        starts = np.vstack([first, self.home, lo + (hi - lo) * rng.random((IK_RESTARTS, n))])
+        w = np.array([1.0, 1.0, 1.0, IK_LENGTH, IK_LENGTH, IK_LENGTH])
+        prism = np.array([k == "prismatic" for k in self.joint_kinds])
+        q, err, ok = _ik_lm(
+            self.dh, prism, lo, hi, self.base, target, starts, w, IK_TOL, IK_ITERATIONS
+        )
+        if not ok:
+            raise Unreachable(
+                f"arm {self.name!r}: no joint vector within the limits reaches the pose "
+                f"(best error {err:.3g} after {len(starts)} starts)"
+            )
+        out: FloatArray = np.clip(q, lo, hi)
+        return out
+
+
+# ------------------------------------------------------------------ numba IK
+
+
+@njit(cache=True)
+def _chain(dh, prism, base, q):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    n = dh.shape[0]
+    fr = np.empty((n + 1, 4, 4))
+    fr[0] = base
+    for i in range(n):
+        a, alpha, d, off = dh[i, 0], dh[i, 1], dh[i, 2], dh[i, 3]
+        th = off + (0.0 if prism[i] else q[i])
+        dd = d + (q[i] if prism[i] else 0.0)
+        ct, st, ca, sa = np.cos(th), np.sin(th), np.cos(alpha), np.sin(alpha)
+        t = np.zeros((4, 4))
+        t[0, 0], t[0, 1], t[0, 2], t[0, 3] = ct, -st * ca, st * sa, a * ct
+        t[1, 0], t[1, 1], t[1, 2], t[1, 3] = st, ct * ca, -ct * sa, a * st
+        t[2, 1], t[2, 2], t[2, 3] = sa, ca, dd
+        t[3, 3] = 1.0
+        fr[i + 1] = fr[i] @ t
+    return fr
+
+
+@njit(cache=True)
+def _err(fr, target):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    cur = fr[fr.shape[0] - 1]
+    e = np.empty(6)
+    for k in range(3):
+        e[k] = target[k, 3] - cur[k, 3]
+    r = np.ascontiguousarray(target[:3, :3]) @ np.ascontiguousarray(cur[:3, :3].T)
+    c = (r[0, 0] + r[1, 1] + r[2, 2] - 1.0) / 2.0
+    c = min(1.0, max(-1.0, c))
+    ang = np.arccos(c)
+    wx, wy, wz = r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]
+    if ang < 1e-9:
+        e[3], e[4], e[5] = wx / 2, wy / 2, wz / 2
+    elif np.pi - ang < 1e-6:
+        b = (r + np.eye(3)) / 2.0
+        k = 0
+        for i in range(3):
+            if b[i, i] > b[k, k]:
+                k = i
+        ax = b[k] / np.sqrt(max(b[k, k], 1e-300))
+        ax = ax / np.sqrt(ax[0] ** 2 + ax[1] ** 2 + ax[2] ** 2)
+        e[3], e[4], e[5] = ax[0] * ang, ax[1] * ang, ax[2] * ang
+    else:
+        f = ang / (2.0 * np.sin(ang))
+        e[3], e[4], e[5] = wx * f, wy * f, wz * f
+    return e
+
+
+@njit(cache=True)
+def _ik_lm(dh, prism, lo, hi, base, target, starts, w, tol, iters):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    n = dh.shape[0]
+    best_err = np.inf
+    best_q = starts[0].copy()
+    for s in range(starts.shape[0]):
+        q = np.minimum(np.maximum(starts[s].copy(), lo), hi)
+        fr = _chain(dh, prism, base, q)
+        e = _err(fr, target)
+        err = np.sqrt(np.sum((e * w) ** 2))
+        lam = 1e-2
+        for _ in range(iters):
+            if np.sqrt(np.sum(e[:3] ** 2)) < tol and np.sqrt(np.sum(e[3:] ** 2)) < tol:
+                return q, 0.0, True
+            jac = np.zeros((6, n))
+            pe = fr[n, :3, 3]
+            for i in range(n):
+                z = fr[i, :3, 2]
+                if prism[i]:
+                    jac[0, i], jac[1, i], jac[2, i] = z[0], z[1], z[2]
+                else:
+                    r = pe - fr[i, :3, 3]
+                    jac[0, i] = z[1] * r[2] - z[2] * r[1]
+                    jac[1, i] = z[2] * r[0] - z[0] * r[2]
+                    jac[2, i] = z[0] * r[1] - z[1] * r[0]
+                    jac[3, i], jac[4, i], jac[5, i] = z[0], z[1], z[2]
+            for k in range(6):
+                jac[k] *= w[k]
+            ew = e * w
+            jj = jac @ jac.T
+            moved = False
+            for _t in range(8):
+                step = jac.T @ np.linalg.solve(jj + lam * np.eye(6), ew)
+                q_new = np.minimum(np.maximum(q + step, lo), hi)
+                fr_new = _chain(dh, prism, base, q_new)
+                e_new = _err(fr_new, target)
+                err_new = np.sqrt(np.sum((e_new * w) ** 2))
+                if err_new < err:
+                    q, e, fr, err = q_new, e_new, fr_new, err_new
+                    lam = max(lam / 3.0, 1e-9)
+                    moved = True
+                    break
+                lam *= 4.0
+            if not moved:
+                break
+        if err < best_err:
+            best_err = err
+            best_q = q
+    return best_q, best_err, False
