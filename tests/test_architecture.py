@@ -25,7 +25,29 @@ def test_import_contracts_hold() -> None:
         check=False,
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert "2 kept, 0 broken" in proc.stdout
+    assert "4 kept, 0 broken" in proc.stdout
+
+
+def test_a_second_fcl_importer_is_detected(tmp_path: Path) -> None:
+    # FCL stays behind workcell.geometry.world: another workcell module
+    # importing it breaks a contract.
+    import shutil
+
+    for pkg in PACKAGES:
+        shutil.copytree(ROOT / pkg, tmp_path / pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    (tmp_path / "workcell" / "_bad.py").write_text("import fcl\n")
+    lint = Path(sys.executable).with_name("lint-imports")
+    proc = subprocess.run(
+        [str(lint), "--config", str(tmp_path / "pyproject.toml")],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        check=False,
+        env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"},
+    )
+    assert proc.returncode != 0
+    assert "workcell._bad -> fcl" in proc.stdout
 
 
 def test_a_broken_layer_is_detected(tmp_path: Path) -> None:

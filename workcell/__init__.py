@@ -1,6 +1,43 @@
-"""workcell: the simulated coordination and control layers, and the command line.
+"""workcell: the physical cell, its compilation into a scheduling problem, and the command line.
 
-So far this package holds the ``multiarm`` console command (:mod:`workcell.cli`);
-the cell model, its compilation into a scheduling problem (FCL, OMPL) and the
-discrete-event simulation come with later work (DESIGN.md).
+* :class:`Cell`, :func:`load_cell`, :func:`load_example`: tasks (tasklib), SDL
+  zones (zones) and heterogeneous arms in one record, from a TOML cell file
+  or a built-in cell (``"supersigma"``, ``"scara4"``, ``"cell8"``).
+* :func:`compile_cell`: the cell as a :class:`scheduler.Problem` (modes timed
+  with the arms' drives, zone windows from a conservative FCL sweep, travel
+  setups, the blocking oracle with OMPL detours); :func:`compile_details`
+  gives the per-mode trajectories behind it.
+* :mod:`workcell.arms`, :mod:`workcell.geometry`: arm models and motion
+  timing; the collision world, sweeps and the detour planner.
+* :mod:`workcell.cli`: the ``multiarm`` command.
+
+Examples
+--------
+>>> problem = compile_cell(load_example("scara4"))
+>>> problem.n_arms, problem.n_tasks
+(4, 20)
 """
+
+from workcell.cell import EXAMPLES, Cell, cell_from_dict, load_cell, load_example
+from workcell.compile import (
+    CompiledCell,
+    CompiledMode,
+    compile_cell,
+    compile_cell_detailed,
+    compile_details,
+)
+from workcell.oracle import CellOracle
+
+__all__ = [
+    "EXAMPLES",
+    "Cell",
+    "CellOracle",
+    "CompiledCell",
+    "CompiledMode",
+    "cell_from_dict",
+    "compile_cell",
+    "compile_cell_detailed",
+    "compile_details",
+    "load_cell",
+    "load_example",
+]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -255,7 +256,7 @@ def test_trajectory_hits_waypoints_and_is_monotone_between_knots(arm) -> None:  
     # servos hit the waypoints; steppers come within half a step of them
     tol = np.array([getattr(d, "step_length", 2e-9) / 2 + 1e-12 for d in arm.drives])
     assert np.all(np.abs(tr.waypoints()[:-1] - w) <= tol)
-    for a, b in zip(knots[:-1], knots[1:], strict=True):
+    for a, b in itertools.pairwise(knots):
         q = tr.sample(np.linspace(a, b, 50))
         d = np.diff(q, axis=0)
         assert np.all((d >= -1e-12) | (d <= 1e-12))
@@ -287,7 +288,11 @@ def test_concatenate_refuses_a_jump() -> None:
 def test_arm_from_dict_builds_each_type() -> None:
     g = arm_from_dict(
         "g",
-        {"type": "gantry", "rails": {"x": [0, 1], "y": [0, 1], "z": [0, 0.5]}, "stepper": {"curve": "loaded"}},
+        {
+            "type": "gantry",
+            "rails": {"x": [0, 1], "y": [0, 1], "z": [0, 0.5]},
+            "stepper": {"curve": "loaded"},
+        },
         "c.toml: arms.g",
     )
     assert g.kind == "gantry" and g.drives[0].curve == "loaded"  # type: ignore[attr-defined]
@@ -300,20 +305,45 @@ def test_arm_from_dict_builds_each_type() -> None:
 @pytest.mark.parametrize(
     ("data", "message"),
     [
-        ({"type": "robot"}, r"c\.toml: arms\.a\.type: expected one of gantry, scara, serial, got 'robot'"),
-        ({"type": "scara", "link_lengths": "abc"}, r"c\.toml: arms\.a\.link_lengths: expected 2 numbers, got 'abc'"),
+        (
+            {"type": "robot"},
+            r"c\.toml: arms\.a\.type: expected one of gantry, scara, serial, got 'robot'",
+        ),
+        (
+            {"type": "scara", "link_lengths": "abc"},
+            r"c\.toml: arms\.a\.link_lengths: expected 2 numbers, got 'abc'",
+        ),
         ({"type": "scara", "lenghts": 1}, r"c\.toml: arms\.a: unknown field 'lenghts'"),
-        ({"type": "scara", "elbow": "up"}, r"c\.toml: arms\.a\.elbow: expected one of nearest, left, right"),
+        (
+            {"type": "scara", "elbow": "up"},
+            r"c\.toml: arms\.a\.elbow: expected one of nearest, left, right",
+        ),
         ({"type": "gantry"}, r"c\.toml: arms\.a\.rails: expected a table"),
-        ({"type": "gantry", "rails": {"x": [1, 0], "y": [0, 1], "z": [0, 1]}}, r"arms\.a\.rails\.x: needs low < high"),
-        ({"type": "gantry", "rails": {"x": [0, 1], "y": [0, 1], "z": [0, 1]}, "stepper": {"max_rate": -3}}, r"arms\.a\.stepper\.max_rate: must be > 0"),
+        (
+            {"type": "gantry", "rails": {"x": [1, 0], "y": [0, 1], "z": [0, 1]}},
+            r"arms\.a\.rails\.x: needs low < high",
+        ),
+        (
+            {
+                "type": "gantry",
+                "rails": {"x": [0, 1], "y": [0, 1], "z": [0, 1]},
+                "stepper": {"max_rate": -3},
+            },
+            r"arms\.a\.stepper\.max_rate: must be > 0",
+        ),
         ({"type": "serial"}, r"arms\.a\.dh: expected rows of \[a, alpha, d, offset\]"),
         ({"type": "serial", "dh": [[0, 0, 0.1]]}, r"arms\.a\.dh\[0\]\.row: expected 4 numbers"),
         ({"type": "serial", "example": "7dof"}, r"arms\.a\.example: expected '6dof'"),
-        ({"type": "scara", "capabilities": "gripper"}, r"arms\.a\.capabilities: expected a list of names"),
+        (
+            {"type": "scara", "capabilities": "gripper"},
+            r"arms\.a\.capabilities: expected a list of names",
+        ),
         ({"type": "scara", "base": [0, 0, 0]}, r"arms\.a\.base: expected 4 numbers"),
         ({"type": "scara", "payload": True}, r"arms\.a\.payload: expected a number, got True"),
-        ({"type": "scara", "home": [0, 9, 0, 0]}, r"c\.toml: arms\.a: .*home .* outside its limits"),
+        (
+            {"type": "scara", "home": [0, 9, 0, 0]},
+            r"c\.toml: arms\.a: .*home .* outside its limits",
+        ),
     ],
 )
 def test_arm_from_dict_errors_name_the_field(data, message) -> None:  # type: ignore[no-untyped-def]

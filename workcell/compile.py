@@ -1,0 +1,481 @@
+"""Compiling a cell into the scheduler's problem: the one boundary (DESIGN.md step 2).
+
+For every (task, arm) pair :func:`compile_cell` decides whether the arm can
+do the task and, if so, builds the **mode**:
+
+1. capabilities and tool mounts: an arm lacking what the task needs has no
+   mode for it;
+2. the task's motion program (:func:`workcell.program.expand_task`) is
+   solved by the arm's inverse kinematics pose by pose, each solution
+   started from the previous one (straight-line moves are subdivided so the
+   joint path follows the line); an unreachable pose or a joint limit means
+   no mode (the reason is kept);
+3. the joint path is timed with the arm's drives (S1.5 stepper profiles for
+   gantry axes, servo profiles otherwise; per-axis or synchronised as the
+   program says, S1.9) plus the step dwells: the mode's duration, nominal or
+   worst case (:attr:`Cell.plan_with`); with ``park="home"`` (the default)
+   the task ends with the arm's move back to its start joints;
+4. the arm's collision shapes are swept along the timed path through the
+   zones (:func:`workcell.geometry.zone_windows`, conservative by the cell's
+   padding): each zone touched gives an ``occupy`` window and, in a shared
+   zone, the ``move`` windows in which the arm moves there; the task's tool is
+   held throughout. Only zones active at the start (SDL ``active``) get
+   windows: the others constrain nothing until activated (S2.5).
+
+Across tasks it carries over every ordering the task set states: explicit
+and part prerequisites, producers before consumers, part groups (S2.11),
+and flag synchronisation (S1.9) as whole-task precedence (the setter ends
+before the waiter starts: safe, and exact when flags are set at a task's
+end, as in the built-in cells); release times from the part-arrival model;
+start zones from the arms' initial poses; sequence-dependent travel times
+(:class:`JointTravelSetup`, exact under the same drive profiles, computed
+a row at a time on demand and cached); and a blocking oracle
+(:class:`workcell.oracle.CellOracle`) for arms parked in another's way.
+
+Examples
+--------
+>>> from workcell.cell import load_example
+>>> problem = compile_cell(load_example("supersigma"))
+>>> problem.n_arms, problem.n_tasks
+(2, 10)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import weakref
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from multiarm.errors import NoFeasibleSchedule, Unreachable, ValidationError
+from multiarm.types import FloatArray, JointVector
+from scheduler import MatrixSetup, Model, Problem, Setup, Window
+from scheduler.setup import BoundSetup
+from tasklib.model import Task
+from workcell.arms import DriveArm, JointTrajectory, Segment
+from workcell.arms.trajectory import Interpolation, move_segment
+from workcell.cell import Cell
+from workcell.geometry import static_occupancy, zone_windows
+from workcell.oracle import CellOracle
+from workcell.program import Program, expand_task
+
+__all__ = [
+    "CompiledCell",
+    "CompiledMode",
+    "JointTravelSetup",
+    "compile_cell",
+    "compile_cell_detailed",
+    "compile_details",
+]
+
+LINEAR_STEP = 0.02
+"""Longest Cartesian step (metres) between inverse-kinematics solutions on a
+straight-line move: the joint path between them is interpolated in joint
+space, so the tool leaves the line by a small fraction of this."""
+
+
+@dataclass(frozen=True, slots=True)
+class CompiledMode:
+    """One (task, arm) mode with everything the simulator needs to execute it.
+
+    Attributes
+    ----------
+    task, arm : str
+    trajectory : JointTrajectory
+        The timed joint path, from the task's start.
+    q_start, q_end : (dof,) float
+        Joint vectors at the task's start and end.
+    windows : tuple of scheduler.Window
+    tools : tuple of str
+    flags_set, flags_waited : tuple of (flag, offset seconds)
+    """
+
+    task: str
+    arm: str
+    trajectory: JointTrajectory
+    q_start: JointVector
+    q_end: JointVector
+    windows: tuple[Window, ...]
+    tools: tuple[str, ...]
+    flags_set: tuple[tuple[str, float], ...] = ()
+    flags_waited: tuple[tuple[str, float], ...] = ()
+
+    @property
+    def duration(self) -> float:
+        """Seconds from the task's start to its end."""
+        return float(self.trajectory.duration)
+
+
+@dataclass(frozen=True, eq=False)
+class CompiledCell:
+    """A compiled cell: the problem plus the per-mode detail behind it.
+
+    Attributes
+    ----------
+    cell : Cell
+    problem : scheduler.Problem
+    modes : tuple of CompiledMode
+        Indexed like ``problem``'s modes.
+    rejected : dict of (task, arm) -> str
+        Why an arm has no mode for a task.
+    seconds : float
+        Wall time of the compile.
+    """
+
+    cell: Cell
+    problem: Problem
+    modes: tuple[CompiledMode, ...]
+    rejected: dict[tuple[str, str], str] = field(default_factory=dict)
+    seconds: float = 0.0
+
+    def mode(self, task: str, arm: str) -> CompiledMode:
+        """The compiled mode of ``task`` on ``arm``."""
+        p = self.problem
+        try:
+            t, a = p.task_names.index(task), p.arm_names.index(arm)
+        except ValueError:
+            raise ValidationError(f"no task {task!r} or arm {arm!r} in {p.name!r}") from None
+        m = int(p.mode_of[a, t])
+        if m < 0:
+            why = self.rejected.get((task, arm), "no mode")
+            raise ValidationError(f"arm {arm!r} has no mode for task {task!r}: {why}")
+        return self.modes[m]
+
+
+_DETAILS: weakref.WeakKeyDictionary[Problem, CompiledCell] = weakref.WeakKeyDictionary()
+
+
+def compile_details(problem: Problem) -> CompiledCell:
+    """The :class:`CompiledCell` behind a problem made by :func:`compile_cell`."""
+    try:
+        return _DETAILS[problem]
+    except KeyError:
+        raise ValidationError(
+            f"problem {problem.name!r} was not made by workcell.compile_cell"
+        ) from None
+
+
+# ------------------------------------------------------------ one mode
+
+
+def _lacks(task: Task, arm: DriveArm) -> str | None:
+    missing = sorted(task.required_capabilities - arm.capabilities)
+    if missing:
+        return f"lacks capability {', '.join(repr(m) for m in missing)}"
+    if task.tool is not None and task.tool not in arm.tools:
+        return f"cannot mount tool {task.tool!r}"
+    return None
+
+
+def _line(a: FloatArray, b: FloatArray) -> list[FloatArray]:
+    """Poses along the straight line from ``a`` to ``b`` (excluded, included),
+    orientation of ``b``, at most :data:`LINEAR_STEP` apart."""
+    dist = float(np.linalg.norm(b[:3, 3] - a[:3, 3]))
+    n = max(1, int(np.ceil(dist / LINEAR_STEP)))
+    out = []
+    for k in range(1, n + 1):
+        t = b.copy()
+        t[:3, 3] = a[:3, 3] + (b[:3, 3] - a[:3, 3]) * (k / n)
+        out.append(t)
+    return out
+
+
+def _mode(
+    program: Program, arm: DriveArm, q0: JointVector, park: JointVector | None = None
+) -> tuple[JointTrajectory, list[float], JointVector]:
+    """Time ``program`` on ``arm`` from joint vector ``q0`` (then back to
+    ``park`` if given).
+
+    Returns the trajectory, each program segment's start offset, and the end
+    joints. Raises Unreachable (naming the step) when a pose cannot be reached.
+    """
+    segments: list[Segment] = []
+    offsets: list[float] = []
+    q = np.asarray(q0, dtype=float)
+    pose = arm.fk(q[None])[0]
+    t = 0.0
+    for seg in program.segments:
+        offsets.append(t)
+        if seg.kind == "dwell":
+            segments.append(Segment(q, q, seg.duration))
+            t += seg.duration
+            continue
+        target = seg.target
+        if target is None:  # pragma: no cover - a move always has a target
+            continue
+        poses = _line(pose, target) if seg.interpolation == "linear" else [target]
+        interp: Interpolation = "sync" if seg.interpolation == "linear" else arm.interpolation
+        for p in poses:
+            try:
+                q_goal = arm.ik(p, q)
+            except Unreachable as exc:
+                raise Unreachable(f"step {seg.step} ({seg.label}): {exc}") from None
+            piece = move_segment(arm.drives, q, q_goal, interp, seg.speed)
+            if piece is not None:
+                segments.append(piece)
+                t += piece.duration
+                q = piece.q1
+        pose = target
+    offsets.append(t)
+    if park is not None:
+        back = move_segment(arm.drives, q, park, arm.interpolation)
+        if back is not None:
+            segments.append(back)
+            q = back.q1
+    if not segments:
+        segments.append(Segment(q, q, 0.0))
+    return JointTrajectory.build(segments), offsets, q
+
+
+# --------------------------------------------------------------- compile
+
+
+def _releases(cell: Cell) -> dict[str, float]:
+    ts = cell.taskset
+    if cell.releases == "none":
+        return {}
+    if cell.releases == "expected":
+        arrive = ts.expected_arrivals()
+    else:
+        arrive = {a.part: a.time for a in ts.sample_arrivals(cell.seed)}
+    out: dict[str, float] = {}
+    for task in ts.tasks:
+        gating = ts.gating_parts(task.id)
+        if gating:
+            out[task.id] = max(arrive[p] for p in gating)
+    return out
+
+
+def compile_cell(
+    cell: Cell,
+    *,
+    plan_with: Literal["nominal", "worst"] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Problem:
+    """Compile ``cell`` into a :class:`scheduler.Problem` (module docstring).
+
+    Parameters
+    ----------
+    cell : Cell
+    plan_with : {"nominal", "worst"}, optional
+        Overrides the cell's own choice.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each task.
+
+    Returns
+    -------
+    scheduler.Problem
+        With a :class:`JointTravelSetup` of travel times and the
+        cell's blocking oracle; :func:`compile_details` gives the modes'
+        trajectories.
+
+    Raises
+    ------
+    NoFeasibleSchedule
+        A task no arm can do: the message names it and why each arm failed.
+    """
+    return compile_cell_detailed(cell, plan_with=plan_with, progress=progress).problem
+
+
+def compile_cell_detailed(
+    cell: Cell,
+    *,
+    plan_with: Literal["nominal", "worst"] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> CompiledCell:
+    """Like :func:`compile_cell`, returning the :class:`CompiledCell`."""
+    t0 = time.perf_counter()
+    plan = plan_with or cell.plan_with
+    ts = cell.taskset
+    zm = cell.zone_map
+    shared = ~zm.exclusive_mask()
+    active = zm.active_mask()
+    tool_names = sorted({t.tool for t in ts.tasks if t.tool is not None})
+    releases = _releases(cell)
+    group_of: dict[str, int] = {}
+    for g, grp in enumerate(ts.groups):
+        for tid in grp.tasks:
+            group_of[tid] = g
+    preds = ts.precedence()
+    for setter, waiter, _flag in ts.flag_edges():
+        preds[waiter] = tuple(dict.fromkeys((*preds.get(waiter, ()), setter)))
+    modes: list[tuple[tuple[int, int], CompiledMode]] = []
+    rejected: dict[tuple[str, str], str] = {}
+    for ti, task in enumerate(ts.tasks):
+        program = expand_task(task, ts.trajectories, plan)
+        reasons = []
+        for ai, (arm, q0) in enumerate(zip(cell.arms, cell.start, strict=True)):
+            why = _lacks(task, arm)
+            if why is None:
+                try:
+                    cm = _compile_mode(task, program, arm, q0, cell, shared, active)
+                except Unreachable as exc:
+                    why = str(exc)
+                else:
+                    modes.append(((ti, ai), cm))
+                    continue
+            rejected[(task.id, arm.name)] = why
+            reasons.append(f"{arm.name}: {why}")
+        if not any(key[0] == ti for key, _ in modes):
+            raise NoFeasibleSchedule(
+                f"cell {cell.name!r}: no arm can do task {task.id!r} ({'; '.join(reasons)})"
+            )
+        if progress is not None:
+            progress(ti + 1, len(ts.tasks))
+    m = _model(cell, releases, group_of, preds, tool_names, active, modes)
+    oracle = CellOracle(cell)
+    problem, ordered = _build(m, cell, modes, oracle)
+    if cell.park == "home":
+        # Every arm rests at its start joints between tasks: a mode that would
+        # hit another arm resting there can never be sure to run; drop it, so
+        # that running the tasks one at a time is always a valid schedule.
+        table = oracle.table()
+        drop = set()
+        for mi in range(problem.n_modes):
+            hit = [b for b in range(problem.n_arms) if math.isinf(table[mi, b, 0])]
+            if hit:
+                t, a = int(problem.mode_task[mi]), int(problem.mode_arm[mi])
+                drop.add((t, a))
+                names = ", ".join(repr(cell.arms[b].name) for b in hit)
+                rejected[(ts.tasks[t].id, cell.arms[a].name)] = (
+                    f"would hit arm {names} resting at its start joints"
+                )
+        if drop:
+            modes = [x for x in modes if x[0] not in drop]
+            for ti, task in enumerate(ts.tasks):
+                if not any(key[0] == ti for key, _ in modes):
+                    why_all = "; ".join(
+                        f"{arm.name}: {rejected.get((task.id, arm.name), '?')}" for arm in cell.arms
+                    )
+                    raise NoFeasibleSchedule(
+                        f"cell {cell.name!r}: no arm can do task {task.id!r} ({why_all})"
+                    )
+            m = _model(cell, releases, group_of, preds, tool_names, active, modes)
+            problem, ordered = _build(m, cell, modes, oracle)
+    out = CompiledCell(cell, problem, ordered, rejected, time.perf_counter() - t0)
+    _DETAILS[problem] = out
+    return out
+
+
+def _model(
+    cell: Cell,
+    releases: dict[str, float],
+    group_of: dict[str, int],
+    preds: dict[str, tuple[str, ...]],
+    tool_names: list[str],
+    active: Any,
+    modes: list[tuple[tuple[int, int], CompiledMode]],
+) -> Model:
+    ts, zm = cell.taskset, cell.zone_map
+    m = Model(cell.name)
+    for z in range(zm.n_zones):
+        m.add_zone(zm.zone_names()[z], "exclusive" if bool(zm.exclusive_mask()[z]) else "shared")
+    for k in tool_names:
+        m.add_tool(k)
+    for arm, q in zip(cell.arms, cell.start, strict=True):
+        zones_in = [z for z in static_occupancy(arm, q, zm) if bool(active[zm.zone_id(z)])]
+        m.add_arm(arm.name, capabilities=sorted(arm.capabilities), start_zones=zones_in)
+    for task in ts.tasks:
+        m.add_task(task.id, release=releases.get(task.id, 0.0), group=group_of.get(task.id, -1))
+    for task in ts.tasks:
+        m.add_predecessors(task.id, preds.get(task.id, ()))
+    for (_t, _a), cm in modes:
+        m.add_mode(cm.task, cm.arm, cm.duration, windows=cm.windows, tools=cm.tools)
+    m.set_setup(JointTravelSetup(cell, modes))
+    return m
+
+
+def _build(
+    m: Model,
+    cell: Cell,
+    modes: list[tuple[tuple[int, int], CompiledMode]],
+    oracle: CellOracle,
+) -> tuple[Problem, tuple[CompiledMode, ...]]:
+    m.set_blocking(oracle)
+    problem = m.build()
+    # the Model orders modes by (task, arm): the same order as ``modes``
+    ordered = tuple(cm for _, cm in sorted(modes, key=lambda x: x[0]))
+    oracle.bind(problem, ordered)
+    return problem, ordered
+
+
+def _compile_mode(
+    task: Task,
+    program: Program,
+    arm: DriveArm,
+    q0: JointVector,
+    cell: Cell,
+    shared: Any,
+    active: Any,
+) -> CompiledMode:
+    # The task starts at its first pose: the travel there is the setup.
+    first = next((s.target for s in program.segments if s.target is not None), None)
+    q_first = arm.ik(first, q0) if first is not None else np.asarray(q0, dtype=float)
+    home = np.asarray(q0, dtype=float) if cell.park == "home" else None
+    traj, offsets, q_end = _mode(program, arm, q_first, home)
+    zw = zone_windows(arm, traj, cell.zone_map, padding=cell.padding)
+    windows: list[Window] = []
+    dur = traj.duration
+    for w in zw.windows:
+        if not bool(active[w.zone_id]):
+            continue
+        kinds = [("occupy", w.occupied)]
+        if bool(shared[w.zone_id]):
+            kinds.append(("move", w.moving))
+        for kind, spans in kinds:
+            for s, e in spans:
+                s, e = max(0.0, float(s)), min(dur, float(e))
+                if e > s:
+                    windows.append(Window(w.zone, s, e, kind))  # type: ignore[arg-type]
+    sets = tuple((f, offsets[i]) for f, i in program.flags_set)
+    waits = tuple((f, offsets[i]) for f, i in program.flags_waited)
+    tools = (task.tool,) if task.tool is not None else ()
+    return CompiledMode(task.id, arm.name, traj, q_first, q_end, tuple(windows), tools, sets, waits)
+
+
+class JointTravelSetup(Setup):
+    """Travel times of a compiled cell: each arm's exact move time (its drives'
+    own profiles, the slowest joint setting the time) from one task's end
+    joints to the next task's start joints (``prev = -1``: its start joints),
+    a row at a time, vectorised over the next tasks, and cached by the problem.
+
+    Written to JSON as the equivalent dense :class:`scheduler.MatrixSetup`.
+    """
+
+    def __init__(self, cell: Cell, modes: list[tuple[tuple[int, int], CompiledMode]]) -> None:
+        self.arms = cell.arms
+        self.start = cell.start
+        self.q_start: dict[int, dict[int, JointVector]] = {a: {} for a in range(len(cell.arms))}
+        self.q_end: dict[int, dict[int, JointVector]] = {a: {} for a in range(len(cell.arms))}
+        for (t, a), cm in modes:
+            self.q_start[a][t] = cm.q_start
+            self.q_end[a][t] = cm.q_end
+
+    def _row(self, n_tasks: int, a: int, prev: int) -> FloatArray:
+        out = np.full(n_tasks, math.inf)
+        targets = self.q_start[a]
+        q0 = self.start[a] if prev < 0 else self.q_end[a].get(prev)
+        if q0 is None or not targets:
+            return out
+        tasks = np.fromiter(targets, dtype=np.int64)
+        q1 = np.stack([targets[t] for t in tasks.tolist()])
+        out[tasks] = self.arms[a].move_times(np.broadcast_to(q0, q1.shape), q1)
+        return out
+
+    def bind(self, problem: Problem) -> BoundSetup:
+        return BoundSetup(problem, lambda a, prev: self._row(problem.n_tasks, a, prev))
+
+    def to_dict(self) -> dict[str, Any]:
+        n_arms = len(self.arms)
+        n_tasks = 1 + max((t for d in self.q_start.values() for t in d), default=-1)
+        times = np.stack(
+            [
+                np.stack([self._row(n_tasks, a, prev) for prev in range(-1, n_tasks)])
+                for a in range(n_arms)
+            ]
+        )
+        return MatrixSetup(np.where(np.isfinite(times), times, 0.0)).to_dict()
