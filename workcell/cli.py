@@ -7,13 +7,16 @@ traceback.
 Sub-commands:
 
 ``demo``
-    Run the main job on the built-in example cells and print what it did.
+    The main job on the built-in cells: compile each, schedule it with every
+    solver, validate, and print per-arm and per-zone summaries.
 ``check FILE...``
     Parse and validate files by extension: ``.tdl`` (trajectories), ``.sdl``
-    (zones), ``.toml`` / ``.json`` (task sets).
+    (zones), ``.toml`` / ``.json`` (task sets; a ``.toml`` with ``[arms]``
+    tables is a cell file, checked by compiling it).
 ``schedule PROBLEM``
-    Solve a scheduling problem (``.json`` written by ``save_problem``, or an
-    FJSPLIB ``.fjs`` file) and print the result; ``--out`` writes the schedule.
+    Solve a scheduling problem (``.json`` written by ``save_problem``, an
+    FJSPLIB ``.fjs`` file, a cell file, or a built-in cell's name) and print
+    the result; ``--out`` writes the schedule.
 ``bench``
     Run the benchmark scripts (``--quick`` for a smoke run).
 """
@@ -21,6 +24,7 @@ Sub-commands:
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -41,89 +45,111 @@ def _print_table(rows: list[dict[str, Any]], columns: Sequence[str]) -> None:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    """Load the built-in example task sets and zone maps and summarise them."""
-    from tasklib import EXAMPLES
-    from zones import examples as zone_examples
+    """The main job on every built-in cell: compile, schedule with every solver, validate."""
+    from workcell.cell import EXAMPLES, load_example
 
-    print(f"multiarm {__version__}: built-in example task sets\n")
-    print(
-        "(the cell model that turns these into scheduling problems comes with the workcell layer;\n"
-        " below, the scheduler runs on a generated problem instead)\n"
-    )
-    rows: list[dict[str, Any]] = [make().summary() for make in EXAMPLES.values()]
+    print(f"multiarm {__version__}: the built-in cells, compiled and scheduled\n")
+    cells = [load_example(name) for name in EXAMPLES]
     _print_table(
-        rows,
-        [
-            "name",
-            "tasks",
-            "steps",
-            "parts",
-            "feeders",
-            "part_groups",
-            "depth",
-            "trajectories",
-            "waypoints",
-        ],
+        [c.summary() for c in cells], ["name", "arms", "arm types", "tasks", "zones", "tools"]
     )
-    print()
-    for s in rows:
-        caps = ", ".join(s["capabilities"])
-        tools = ", ".join(s["tools"]) or "none"
-        print(f"{s['name']}: capabilities {caps}; tools {tools}")
-    print("\nbuilt-in zone maps (SDL)\n")
-    zrows = []
-    for name in zone_examples.EXAMPLES:
-        zs = zone_examples.load_example(name).summary()
-        zrows.append({"cell": name, **zs})
-    _print_table(
-        zrows, ["cell", "zones", "exclusive", "shared", "walls", "tools", "phases", "active"]
-    )
-    _demo_schedule()
+    for cell in cells:
+        _demo_cell(cell, args.time_limit)
     return 0
 
 
-def _demo_schedule() -> None:
-    """Schedule a generated cell-like problem with every solver (2 s each)."""
-    from scheduler import lower_bound, solve, validate
-    from scheduler.generate import random_problem
+def _demo_cell(cell: Any, time_limit: float) -> None:
+    import time
 
-    problem = random_problem(4, 40, 6, 2, seed=0, start_zones=True)
-    print(f"\nscheduling a generated problem (seed 0): {problem!r}")
-    print(f"lower bound {lower_bound(problem):.6g} s\n")
+    from scheduler import lower_bound, solve, validate
+    from workcell.compile import compile_cell_detailed
+
+    print(f"\n== {cell.name}: {cell.description}")
+    t0 = time.perf_counter()
+    cc = compile_cell_detailed(cell)
+    p = cc.problem
+    print(
+        f"compiled in {time.perf_counter() - t0:.1f} s: {p.n_tasks} tasks, {p.n_modes} modes "
+        f"({len(cc.rejected)} (task, arm) pairs have none), {p.n_windows} zone windows; "
+        f"lower bound {lower_bound(p):.1f} s"
+    )
     rows = []
+    best = None
     for solver in ("greedy", "tree", "cpsat"):
-        r = solve(problem, solver, time_limit=2.0, seed=0)
-        if r.schedule is None:
-            rows.append(
-                {
-                    "solver": solver,
-                    "status": r.status.value,
-                    "makespan": "-",
-                    "bound": f"{r.bound:.6g}",
-                    "waits (s)": "-",
-                    "first (s)": "-",
-                    "time (s)": f"{r.runtime:.2f}",
-                }
-            )
-            continue
+        r = solve(p, solver, time_limit=time_limit, seed=0)
+        ok = r.schedule is not None
+        mk = validate(p, r.schedule) if r.schedule is not None else math.inf
+        if r.schedule is not None and (best is None or mk < best[0]):
+            best = (mk, r.schedule, solver)
         rows.append(
             {
                 "solver": solver,
                 "status": r.status.value,
-                "makespan": f"{validate(problem, r.schedule):.6g}",
-                "bound": f"{r.bound:.6g}",
-                "waits (s)": f"{r.schedule.total_wait():.6g}",
-                "first (s)": f"{r.stats.first_time:.3f}",
-                "time (s)": f"{r.runtime:.2f}",
+                "makespan (s)": f"{mk:.1f}" if ok else "none",
+                "bound (s)": f"{r.bound:.1f}",
+                "time (s)": f"{r.runtime:.1f}",
             }
         )
-    _print_table(
-        rows, ["solver", "status", "makespan", "bound", "waits (s)", "first (s)", "time (s)"]
-    )
+    _print_table(rows, ["solver", "status", "makespan (s)", "bound (s)", "time (s)"])
+    if best is None:
+        return
+    mk, sched, solver = best
+    print(f"\nbest schedule ({solver}, {mk:.1f} s) per arm:")
+    arm_rows = []
+    arm_of = sched.arms(p)
+    for a, name in enumerate(p.arm_names):
+        tasks = [t for t in range(p.n_tasks) if int(arm_of[t]) == a]
+        busy = sum(float(sched.end[t] - sched.start[t]) for t in tasks)
+        arm_rows.append(
+            {
+                "arm": name,
+                "type": cell.arms[a].kind,
+                "tasks": len(tasks),
+                "busy (s)": f"{busy:.1f}",
+                "utilisation": f"{busy / mk:.0%}" if mk > 0 else "-",
+            }
+        )
+    _print_table(arm_rows, ["arm", "type", "tasks", "busy (s)", "utilisation"])
+    print("per zone:")
+    zone_rows = []
+    reservations = sched.reservations(p)
+    for z, name in enumerate(p.zone_names):
+        exclusive = bool(p.zone_exclusive[z])
+        kind = "zone" if exclusive else "move"
+        res = [r for r in reservations if r.kind == kind and r.resource == name]
+        held = sum(r.end - r.start for r in res)
+        zone_rows.append(
+            {
+                "zone": name,
+                "policy": "exclusive" if exclusive else "shared",
+                "uses": len(res),
+                "occupied or moved in (s)": f"{held:.1f}",
+            }
+        )
+    _print_table(zone_rows, ["zone", "policy", "uses", "occupied or moved in (s)"])
+
+
+def _is_cell(path: Path) -> bool:
+    """A TOML file with an ``[arms...]`` table is a cell file (else a task set)."""
+    import tomllib
+
+    try:
+        return "arms" in tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False
 
 
 def _check_one(path: Path) -> str:
     suffix = path.suffix.lower()
+    if suffix == ".toml" and _is_cell(path):
+        from workcell import compile_cell, load_cell
+
+        cell = load_cell(path)
+        p = compile_cell(cell)
+        return (
+            f"cell {cell.name!r}: {len(cell.arms)} arms, {p.n_tasks} tasks, {p.n_modes} modes, "
+            f"{p.n_zones} zones"
+        )
     if suffix == ".tdl":
         from tasklib import load_tdl
 
@@ -159,14 +185,32 @@ def cmd_check(args: argparse.Namespace) -> int:
     return status
 
 
+def _load_schedulable(name: str) -> Any:
+    """A problem from a problem JSON, an FJSP file, a cell file or a built-in cell's name."""
+    from scheduler import load_problem, read_fjsp
+    from workcell.cell import EXAMPLES, load_example
+
+    path = Path(name)
+    if not path.exists() and name in EXAMPLES:
+        from workcell import compile_cell
+
+        return compile_cell(load_example(name))
+    if path.suffix.lower() == ".fjs":
+        return read_fjsp(path)
+    if path.suffix.lower() == ".toml":
+        from workcell import compile_cell, load_cell
+
+        return compile_cell(load_cell(path))
+    return load_problem(path)
+
+
 def cmd_schedule(args: argparse.Namespace) -> int:
-    """Solve a problem file and print (and optionally write) the schedule."""
+    """Solve a problem file or a cell and print (and optionally write) the schedule."""
     import json
 
-    from scheduler import load_problem, lower_bound, read_fjsp, solve
+    from scheduler import lower_bound, solve
 
-    path = Path(args.problem)
-    problem = read_fjsp(path) if path.suffix.lower() == ".fjs" else load_problem(path)
+    problem = _load_schedulable(args.problem)
     print(f"{problem!r}; lower bound {lower_bound(problem):.6g}")
     result = solve(
         problem, args.solver, time_limit=args.time_limit, seed=args.seed, waits=not args.no_waits
@@ -202,11 +246,19 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"multiarm {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("demo", help="run the main job on the built-in example cells")
+    p.add_argument(
+        "--time-limit", type=float, default=3.0, metavar="SECONDS", help="per solver and cell"
+    )
     p.set_defaults(func=cmd_demo)
-    p = sub.add_parser("check", help="parse and validate .tdl/.sdl/.toml/.json files")
+    p = sub.add_parser(
+        "check", help="parse and validate .tdl/.sdl files, task sets and cell files (.toml/.json)"
+    )
     p.add_argument("files", nargs="+", metavar="FILE")
     p.set_defaults(func=cmd_check)
-    p = sub.add_parser("schedule", help="solve a problem (.json) or an FJSP instance (.fjs)")
+    p = sub.add_parser(
+        "schedule",
+        help="solve a problem (.json), an FJSP instance (.fjs), a cell file (.toml) or a built-in cell",
+    )
     p.add_argument("problem", metavar="PROBLEM")
     p.add_argument("--solver", choices=["tree", "greedy", "cpsat"], default="tree")
     p.add_argument("--time-limit", type=float, default=10.0, metavar="SECONDS")

@@ -13,14 +13,33 @@ from workcell.cli import main
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def test_demo_prints_every_example(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["demo"]) == 0
+def test_demo_compiles_and_schedules_every_builtin_cell(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["demo", "--time-limit", "0.5"]) == 0
     out = capsys.readouterr().out
     for name in ("supersigma", "scara4", "cell8"):
-        assert out.count(name) >= 2  # task set and zone map
-    assert "depth" in out
+        assert f"== {name}:" in out
+    assert out.count("compiled in") == 3
+    assert out.count("per arm:") == 3 and out.count("per zone:") == 3
     for solver in ("greedy", "tree", "cpsat"):  # the scheduling step ran with every solver
-        assert f"\n{solver} " in out
+        assert out.count(f"\n{solver} ") == 3
+
+
+def test_schedule_and_check_cells(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["schedule", "supersigma", "--solver", "greedy"]) == 0
+    assert "Problem('supersigma': 2 arms, 10 tasks" in capsys.readouterr().out
+    cell = tmp_path / "cell.toml"
+    cell.write_text(
+        'name = "mine"\nzones = "builtin:scara4"\ntasks = "builtin:scara4"\n'
+        '[arms.a]\ntype = "scara"\nbase = [-0.5, -0.5, 0.0, 0.785]\n'
+        'capabilities = ["gripper", "force_sensor", "tool_changer", "vacuum", "camera"]\n'
+        'tools = ["screwdriver", "press"]\n'
+    )
+    assert main(["check", str(cell)]) == 1  # one arm at a corner cannot reach the conveyor
+    err = capsys.readouterr().err
+    assert "no arm can do task" in err and "Traceback" not in err
+    cell.write_text(cell.read_text().replace("[arms.a]", "[arms.a]\nreach = 3"))
+    assert main(["schedule", str(cell)]) == 1
+    assert f"{cell}: arms.a: unknown field 'reach'" in capsys.readouterr().err
 
 
 def test_check_good_and_bad_files(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
