@@ -36,7 +36,20 @@ def test_tdl_reference_example_parses() -> None:
     assert doc.names() == ("pick_and_place",)
 
 
-@pytest.mark.parametrize("name", ["tasklib.md", "zones.md", "scheduler.md", "README"])
+def test_cell_file_example_in_docs_loads() -> None:
+    import tomllib
+
+    from workcell import cell_from_dict, compile_cell
+
+    block = re.findall(r"```toml\n(.*?)```", (DOCS / "workcell.md").read_text(), flags=re.S)[0]
+    cell = cell_from_dict(tomllib.loads(block), filename="cell.toml")
+    assert [a.name for a in cell.arms] == ["left", "right"]
+    assert compile_cell(cell).n_arms == 2
+
+
+@pytest.mark.parametrize(
+    "name", ["tasklib.md", "zones.md", "scheduler.md", "workcell.md", "README"]
+)
 def test_python_examples_in_docs_run(
     name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
