@@ -5,9 +5,12 @@ from __future__ import annotations
 import sys
 
 from benchmarks import (
+    bench_cells,
     bench_fjsp,
     bench_generated,
+    bench_geometry,
     bench_kernel,
+    bench_oracle,
     bench_resolve,
     bench_scale,
     bench_zones,
@@ -16,7 +19,17 @@ from benchmarks import (
 
 def main() -> None:
     quick = ["--quick"] if "--quick" in sys.argv[1:] else []
-    for mod in (bench_kernel, bench_zones, bench_resolve, bench_scale, bench_generated, bench_fjsp):
+    for mod in (
+        bench_kernel,
+        bench_oracle,
+        bench_zones,
+        bench_geometry,
+        bench_cells,
+        bench_resolve,
+        bench_scale,
+        bench_generated,
+        bench_fjsp,
+    ):
         print(f"== {mod.__name__}", flush=True)
         sys.argv = [mod.__name__, *quick]
         mod.main()

@@ -22,6 +22,9 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_generated",
         "bench_scale",
         "bench_resolve",
+        "bench_geometry",
+        "bench_oracle",
+        "bench_cells",
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
