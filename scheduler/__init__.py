@@ -12,21 +12,27 @@
 
 from scheduler.bounds import LowerBounds, lower_bound, lower_bounds
 from scheduler.fjsp import parse_fjsp, read_fjsp
+from scheduler.greedy import GreedyOptions
 from scheduler.problem import BlockingOracle, Model, Problem, Window, load_problem, save_problem
-from scheduler.result import Result, SearchStats, SolveStatus
+from scheduler.result import Progress, Result, SearchStats, SolveStatus
 from scheduler.schedule import Reservation, Schedule, ScheduleError, validate
 from scheduler.setup import FunctionSetup, MatrixSetup, NoSetup, Setup, TravelSetup
-from scheduler.solve import SOLVERS, SolverName, solve
+from scheduler.solve import REGISTRY, SOLVERS, CpSatOptions, SolverName, solve
+from scheduler.tree import TreeOptions
 
 __all__ = [
+    "REGISTRY",
     "SOLVERS",
     "BlockingOracle",
+    "CpSatOptions",
     "FunctionSetup",
+    "GreedyOptions",
     "LowerBounds",
     "MatrixSetup",
     "Model",
     "NoSetup",
     "Problem",
+    "Progress",
     "Reservation",
     "Result",
     "Schedule",
@@ -36,6 +42,7 @@ __all__ = [
     "SolveStatus",
     "SolverName",
     "TravelSetup",
+    "TreeOptions",
     "Window",
     "load_problem",
     "lower_bound",

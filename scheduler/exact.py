@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -106,10 +107,12 @@ def branch_and_bound(
     deadline: float = math.inf,
     waits: bool = True,
     max_nodes: int | None = None,
+    stop: Any = None,
 ) -> ExactResult:
     """Search for a schedule shorter than ``upper``; ``complete`` is True when
     the search finished (then the best found, or none, is optimal). It stops
-    early at ``deadline`` or after ``max_nodes`` nodes."""
+    early at ``deadline``, after ``max_nodes`` nodes, or once ``stop`` (a
+    ``threading.Event``) is set."""
     p = problem
     T = p.n_tasks
     shapes = p.shapes
@@ -239,7 +242,11 @@ def branch_and_bound(
     node_limit = math.inf if max_nodes is None else max_nodes
 
     def exhausted() -> bool:
-        if time.perf_counter() > deadline or stats["nodes"] >= node_limit:
+        if (
+            time.perf_counter() > deadline
+            or stats["nodes"] >= node_limit
+            or (stop is not None and stop.is_set())
+        ):
             stats["timeout"] = True
         return bool(stats["timeout"])
 

@@ -3,13 +3,39 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
 from scheduler.schedule import Schedule
 
-__all__ = ["Result", "SearchStats", "SolveStatus"]
+__all__ = ["Progress", "Result", "SearchStats", "SolveStatus"]
+
+
+@dataclass(frozen=True, slots=True)
+class Progress:
+    """One improvement of a running solve, handed to ``solve(..., progress=f)``.
+
+    Attributes
+    ----------
+    elapsed : float
+        Seconds since the solver's clock started.
+    objective : float
+        The incumbent's makespan (inf before the first schedule).
+    bound : float
+        The best lower bound known to the caller's solve.
+    solver : str
+    """
+
+    elapsed: float
+    objective: float
+    bound: float
+    solver: str
+
+
+_LISTENER: list[Callable[[float, float], None] | None] = [None]
+"""The progress listener of the running :func:`scheduler.solve` (set there)."""
 
 
 class SolveStatus(StrEnum):
@@ -45,8 +71,26 @@ class SearchStats:
     phases: dict[str, float] = field(default_factory=dict)
     """Seconds spent per phase."""
     extra: dict[str, Any] = field(default_factory=dict)
+    interrupted: bool = False
+    """True when Ctrl-C (KeyboardInterrupt) stopped the search: the result
+    holds the best schedule found until then."""
+    listener: Callable[[float, float], None] | None = field(
+        default_factory=lambda: _LISTENER[0], repr=False, compare=False
+    )
+    """Called with (time, objective) at every improvement (set by ``solve``)."""
 
     def record(self, t: float, objective: float) -> None:
+        """Note an improved incumbent found ``t`` seconds in, and tell the listener.
+
+        Parameters
+        ----------
+        t : float
+            Seconds since the solve started.
+        objective : float
+            The new incumbent's makespan.
+        """
+        if self.listener is not None:
+            self.listener(t, objective)
         if math.isnan(self.first_time):
             self.first_time = t
             self.first_objective = objective
@@ -96,6 +140,42 @@ class Result:
     def empty(cls, solver: str, seed: int, runtime: float, stats: SearchStats) -> Result:
         """The (optimal, empty) result of a problem without tasks."""
         return cls(SolveStatus.OPTIMAL, Schedule.empty(), 0.0, 0.0, runtime, solver, seed, stats)
+
+    def to_dataframe(self) -> Any:
+        """One row of the result: solver, status, objective, bound, gap, runtime, seed, counts.
+
+        Returns
+        -------
+        pandas.DataFrame
+            A single row (the schedule's rows come from ``Schedule.to_dataframe``).
+
+        Raises
+        ------
+        UsageError
+            pandas is not installed.
+        """
+        try:
+            import pandas as pd
+        except ImportError as exc:  # pragma: no cover - pandas is in the test extras
+            from multiarm.errors import UsageError
+
+            raise UsageError("Result.to_dataframe needs pandas (pip install pandas)") from exc
+        return pd.DataFrame(
+            [
+                {
+                    "solver": self.solver,
+                    "status": self.status.value,
+                    "objective": self.objective,
+                    "bound": self.bound,
+                    "gap": self.gap,
+                    "runtime": self.runtime,
+                    "seed": self.seed,
+                    "nodes": self.stats.nodes,
+                    "evaluations": self.stats.evaluations,
+                    "interrupted": self.stats.interrupted,
+                }
+            ]
+        )
 
     def summary(self) -> str:
         """One line for logs."""

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import heapq
 import math
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -131,6 +132,8 @@ class Evaluator:
         self.allowed = allowed
         self.arm_lb = arm_lb
         self.frozen = frozen
+        self.stop: threading.Event | None = None
+        """Set by another thread (a racing exact solver that proved the optimum) to stop."""
 
     # ---------------------------------------------------------- decoding
     def decode(
@@ -284,7 +287,13 @@ class Budget:
         self.prep = 0.0
 
     def spent(self) -> bool:
-        return time.perf_counter() >= self.deadline or self.ev.evaluations >= self.limit
+        """Whether the deadline, the work limit or a stop request is reached."""
+        stop = self.ev.stop
+        return (
+            time.perf_counter() >= self.deadline
+            or self.ev.evaluations >= self.limit
+            or (stop is not None and stop.is_set())
+        )
 
     def room_for_iteration(self) -> bool:
         return not self.spent() and time.perf_counter() + self.prep <= self.deadline

@@ -1,5 +1,11 @@
 """One interface for every solver: ``solve(problem, solver, time_limit, seed)``.
 
+Solvers are registered in :data:`REGISTRY` (name -> options class and entry
+point); each takes its typed, frozen options (:class:`~scheduler.tree.TreeOptions`,
+:class:`~scheduler.greedy.GreedyOptions`, :class:`CpSatOptions`). The old
+keyword options (``workers=``, ``hint=``, ``log=`` for CP-SAT; ``start=``
+for the tree) are still accepted.
+
 Examples
 --------
 >>> from scheduler.fjsp import parse_fjsp
@@ -9,50 +15,131 @@ Examples
 ('optimal', 5.0)
 >>> solve(p, "greedy").objective >= r.objective
 True
+>>> seen = []
+>>> _ = solve(p, "greedy", progress=seen.append)
+>>> seen[0].solver, seen[0].objective
+('greedy', 5.0)
 """
 
 from __future__ import annotations
 
 import math
 import time
-from typing import Literal
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from typing import Any, Literal
 
 import numpy as np
 
 from multiarm.errors import UsageError
-from scheduler.bounds import lower_bound
+from scheduler import result as _result
+from scheduler.greedy import GreedyOptions, solve_greedy
 from scheduler.problem import Problem
-from scheduler.result import Result, SearchStats, SolveStatus
-from scheduler.schedule import validate
-from scheduler.search import Evaluator, priority_order
+from scheduler.result import Progress, Result, SearchStats, SolveStatus
+from scheduler.tree import TreeOptions
 
-__all__ = ["SOLVERS", "SolverName", "solve", "solve_greedy"]
+__all__ = [
+    "REGISTRY",
+    "SOLVERS",
+    "CpSatOptions",
+    "SolverName",
+    "SolverSpec",
+    "solve",
+    "solve_greedy",
+]
 
 SolverName = Literal["tree", "greedy", "cpsat"]
 SOLVERS: tuple[str, ...] = ("tree", "greedy", "cpsat")
+MAX_SEED = 2**31 - 1
 
 
-def solve_greedy(problem: Problem, seed: int = 0, *, waits: bool = True) -> Result:
-    """Earliest-finish-time list scheduling (HEFT): tasks in order of upward
-    rank (mean duration plus the longest chain after them), each placed in
-    the mode that finishes first, at its earliest feasible time."""
-    t0 = time.perf_counter()
-    p = problem
-    stats = SearchStats()
-    lb = lower_bound(p)
-    if p.n_tasks == 0:
-        return Result.empty("greedy", seed, time.perf_counter() - t0, stats)
-    ev = Evaluator(p, waits=waits)
-    sol = ev.evaluate(priority_order(p))
-    stats.evaluations = ev.evaluations
-    runtime = time.perf_counter() - t0
-    if sol is None:
-        return Result(SolveStatus.UNKNOWN, None, math.inf, lb, runtime, "greedy", seed, stats)
-    sched = ev.schedule(sol)
-    mk = validate(p, sched)
-    stats.record(runtime, mk)
-    status = SolveStatus.OPTIMAL if mk <= lb + 1e-9 else SolveStatus.FEASIBLE
-    return Result(status, sched, mk, min(lb, mk), runtime, "greedy", seed, stats)
+@dataclass(frozen=True, slots=True)
+class CpSatOptions:
+    """Knobs of the CP-SAT solver.
+
+    Attributes
+    ----------
+    workers : int
+        CP-SAT search workers (>= 1).
+    hint : bool or Schedule
+        ``True``: hint the earliest-finish-time schedule; ``False``: none; a
+        Schedule: start from it.
+    log : bool
+        CP-SAT's search log on stdout.
+
+    Raises
+    ------
+    UsageError
+        A field out of range.
+    """
+
+    workers: int = 2
+    hint: Any = True
+    log: bool = False
+
+    def __post_init__(self) -> None:
+        if isinstance(self.workers, bool) or not isinstance(self.workers, int) or self.workers < 1:
+            raise UsageError(f"CpSatOptions.workers must be an int >= 1, got {self.workers!r}")
+        if not isinstance(self.log, bool):
+            raise UsageError(f"CpSatOptions.log must be a bool, got {self.log!r}")
+
+
+def _run_tree(
+    p: Problem, tl: float | None, seed: int, waits: bool, opt: Any, extra: dict[str, Any]
+) -> Result:
+    from scheduler.tree import solve_tree
+
+    return solve_tree(p, tl, seed, waits=waits, options=opt, **extra)
+
+
+def _run_greedy(
+    p: Problem, tl: float | None, seed: int, waits: bool, opt: Any, extra: dict[str, Any]
+) -> Result:
+    return solve_greedy(p, seed, waits=waits, time_limit=tl, options=opt)
+
+
+def _run_cpsat(
+    p: Problem, tl: float | None, seed: int, waits: bool, opt: Any, extra: dict[str, Any]
+) -> Result:
+    from scheduler.cpsat import solve_cpsat
+
+    o = opt or CpSatOptions()
+    return solve_cpsat(p, tl, seed, waits=waits, workers=o.workers, hint=o.hint, log=o.log)
+
+
+@dataclass(frozen=True, slots=True)
+class SolverSpec:
+    """A registered solver.
+
+    Attributes
+    ----------
+    options : type
+        Its frozen options dataclass.
+    run : callable
+        ``run(problem, time_limit, seed, waits, options, extra) -> Result``.
+    extra : tuple of str
+        Keyword arguments that are not options (e.g. the tree's ``start``).
+    """
+
+    options: type
+    run: Callable[[Problem, float | None, int, bool, Any, dict[str, Any]], Result]
+    extra: tuple[str, ...] = ()
+
+
+REGISTRY: dict[str, SolverSpec] = {
+    "tree": SolverSpec(TreeOptions, _run_tree, ("start",)),
+    "greedy": SolverSpec(GreedyOptions, _run_greedy),
+    "cpsat": SolverSpec(CpSatOptions, _run_cpsat),
+}
+
+
+def _warm_up() -> None:
+    """Compile the kernel before any solver's clock starts (when the kernel offers it)."""
+    from scheduler import kernel
+
+    warm = getattr(kernel, "warm_up", None)
+    if warm is not None:
+        warm()
 
 
 def solve(
@@ -62,7 +149,9 @@ def solve(
     seed: int = 0,
     *,
     waits: bool = True,
-    **options: object,
+    options: object = None,
+    progress: Callable[[Progress], None] | None = None,
+    **legacy: object,
 ) -> Result:
     """Solve ``problem`` and return a :class:`~scheduler.result.Result`.
 
@@ -72,55 +161,98 @@ def solve(
     solver : {"tree", "greedy", "cpsat"}
         ``tree`` (default): the anytime tree search with pruning and local
         improvement; ``greedy``: the earliest-finish-time list-scheduling
-        baseline; ``cpsat``: the exact OR-Tools CP-SAT model.
+        baseline; ``cpsat``: the exact OR-Tools CP-SAT model. When list
+        decoding finds no schedule, ``tree`` and ``greedy`` ask CP-SAT
+        (:mod:`scheduler.fallback`).
     time_limit : float or None
-        Seconds; ``None`` means no limit (the tree search then runs its
-        exact phase to the end on small problems).
+        Seconds, finite and > 0; ``None`` means no limit.
     seed : int
-        Every random choice derives from it: the same seed gives the same
-        schedule (for ``cpsat``, with the same number of workers and no time
-        limit cutting the search).
+        In 0..2**31-1. Every random choice derives from it.
     waits : bool
         Whether schedules may insert waits at zone borders (S2.6).
-    **options
-        Solver-specific: ``tree`` takes ``options=TreeOptions(...)`` and
-        ``start=Solution``; ``cpsat`` takes ``workers``, ``hint``, ``log``.
+    options : TreeOptions, GreedyOptions, CpSatOptions or None
+        The solver's typed options (defaults when None).
+    progress : callable or None
+        Called with a :class:`~scheduler.result.Progress` at every improved
+        incumbent.
+    **legacy
+        The former keyword options: ``start=Solution`` (tree); ``workers``,
+        ``hint``, ``log`` (cpsat).
 
     Returns
     -------
     Result
-        Its schedule, when there is one, has passed :func:`validate`.
+        Its schedule, when there is one, has passed :func:`validate`. After
+        Ctrl-C, the best found so far with ``stats.interrupted = True``.
 
     Raises
     ------
     UsageError
-        An unknown solver name or option, or a negative time limit.
+        An unknown solver or option, options of another solver, a time limit
+        that is not finite and > 0, or a seed outside 0..2**31-1.
     """
-    if time_limit is not None and not (time_limit >= 0):
-        raise UsageError(f"time_limit must be >= 0 seconds or None, got {time_limit!r}")
+    if time_limit is not None:
+        if isinstance(time_limit, bool) or not isinstance(time_limit, int | float | np.number):
+            raise UsageError(f"time_limit must be a number of seconds or None, got {time_limit!r}")
+        if not (math.isfinite(float(time_limit)) and time_limit > 0):
+            raise UsageError(
+                f"time_limit must be finite and > 0 seconds, or None for no limit, "
+                f"got {time_limit!r}"
+            )
+        time_limit = float(time_limit)
     if not isinstance(seed, int | np.integer) or isinstance(seed, bool):
         raise UsageError(f"seed must be an int, got {seed!r}")
+    if not 0 <= int(seed) <= MAX_SEED:
+        raise UsageError(f"seed must be in 0..{MAX_SEED}, got {seed!r}")
     seed = int(seed)
-    if solver == "tree":
-        from scheduler.tree import solve_tree
-
-        allowed = {"options", "start"}
-        _check(options, allowed, solver)
-        return solve_tree(problem, time_limit, seed, waits=waits, **options)  # type: ignore[arg-type]
-    if solver == "greedy":
-        _check(options, set(), solver)
-        return solve_greedy(problem, seed, waits=waits)
-    if solver == "cpsat":
-        from scheduler.cpsat import solve_cpsat
-
-        _check(options, {"workers", "hint", "log"}, solver)
-        return solve_cpsat(problem, time_limit, seed, waits=waits, **options)  # type: ignore[arg-type]
-    raise UsageError(f"unknown solver {solver!r} (known: {', '.join(SOLVERS)})")
-
-
-def _check(options: dict[str, object], allowed: set[str], solver: str) -> None:
-    bad = set(options) - allowed
+    spec = REGISTRY.get(solver)
+    if spec is None:
+        raise UsageError(f"unknown solver {solver!r} (known: {', '.join(SOLVERS)})")
+    extra = {k: legacy.pop(k) for k in spec.extra if k in legacy}
+    names = {f.name for f in fields(spec.options)}
+    bad = set(legacy) - names
     if bad:
+        allowed = sorted(names | set(spec.extra) | {"options"})
         raise UsageError(
-            f"solver {solver!r} has no option {sorted(bad)[0]!r} (it takes: {', '.join(sorted(allowed)) or 'none'})"
+            f"solver {solver!r} has no option {sorted(bad)[0]!r} (it takes: {', '.join(allowed)})"
         )
+    if options is not None and not isinstance(options, spec.options):
+        raise UsageError(
+            f"solver {solver!r} takes options={spec.options.__name__}(...), "
+            f"got {type(options).__name__}"
+        )
+    if legacy:
+        from dataclasses import replace
+
+        options = replace(options or spec.options(), **legacy)  # type: ignore[type-var]
+    _warm_up()
+    listener = None
+    if progress is not None:
+        from scheduler.bounds import lower_bound
+
+        lb = lower_bound(problem)
+
+        def listener(t: float, objective: float) -> None:
+            progress(Progress(t, objective, min(lb, objective), solver))
+
+    _result._LISTENER[0] = listener
+    t0 = time.perf_counter()
+    try:
+        return spec.run(problem, time_limit, seed, waits, options, extra)
+    except KeyboardInterrupt:
+        # solvers that keep a best schedule return it themselves; here nothing was kept
+        stats = SearchStats(interrupted=True)
+        from scheduler.bounds import lower_bound
+
+        return Result(
+            SolveStatus.UNKNOWN,
+            None,
+            math.inf,
+            lower_bound(problem),
+            time.perf_counter() - t0,
+            solver,
+            seed,
+            stats,
+        )
+    finally:
+        _result._LISTENER[0] = None

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from multiarm.errors import UsageError
 from multiarm.types import FloatArray, IntArray
 from scheduler import exact
 from scheduler.bounds import heads_and_tails, lower_bound
@@ -52,9 +53,15 @@ from scheduler.tabu import tabu_search
 __all__ = ["TreeOptions", "beam_pass", "solve_tree"]
 
 
-@dataclass
+@dataclass(frozen=True)
 class TreeOptions:
-    """Knobs of the tree search (defaults suit problems up to a few thousand tasks)."""
+    """Knobs of the tree search (defaults suit problems up to a few thousand tasks).
+
+    Raises
+    ------
+    UsageError
+        A field out of range (checked at construction).
+    """
 
     max_width: int = 64
     """Widest beam tried."""
@@ -82,6 +89,39 @@ class TreeOptions:
     ``parallel_min_time`` and where ``fork`` exists (Linux); work-limited runs
     stay in one process, so they remain exactly repeatable."""
     parallel_min_time: float = 1.0
+    portfolio_max_tasks: int = 16
+    """Race CP-SAT (one worker, in a thread) against the tree search on
+    problems with at most this many tasks, when the run has a wall-clock
+    limit and no work limit: the better schedule wins, and CP-SAT's proof of
+    optimality ends the tree search at once (0: never)."""
+    fallback: bool = True
+    """When no list order decodes, ask CP-SAT (one worker) within the budget
+    left (:mod:`scheduler.fallback`)."""
+
+    def __post_init__(self) -> None:
+        ints = {
+            "max_width": 1,
+            "exact_max_tasks": 0,
+            "local_evaluations": 1,
+            "workers": 1,
+            "portfolio_max_tasks": 0,
+        }
+        for name, least in ints.items():
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < least:
+                raise UsageError(f"TreeOptions.{name} must be an int >= {least}, got {v!r}")
+        for name in ("max_evaluations", "exact_max_nodes"):
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
+                raise UsageError(f"TreeOptions.{name} must be an int >= 1 or None, got {v!r}")
+        for name in ("beam_share", "improve_share"):
+            v = getattr(self, name)
+            if not isinstance(v, int | float) or not (0.0 < v <= 1.0):
+                raise UsageError(f"TreeOptions.{name} must be in (0, 1], got {v!r}")
+        for name in ("restart_noise", "parallel_min_time"):
+            v = getattr(self, name)
+            if not isinstance(v, int | float) or not (0.0 <= v < math.inf):
+                raise UsageError(f"TreeOptions.{name} must be finite and >= 0, got {v!r}")
 
 
 @dataclass
@@ -222,6 +262,9 @@ def beam_pass(
 
 def _portfolio_member(conn, problem: Problem, waits: bool, seed: int, seconds: float) -> None:  # type: ignore[no-untyped-def]
     """A forked worker: improve the HEFT schedule from its own seed, send back the best schedule."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     try:
         t0 = time.perf_counter()
         ev = Evaluator(problem, waits=waits)
@@ -254,6 +297,71 @@ def _portfolio_member(conn, problem: Problem, waits: bool, seed: int, seconds: f
         conn.send(("error", repr(exc)))
     finally:
         conn.close()
+
+
+class _Race:
+    """CP-SAT on one worker in a thread (it releases the GIL while searching)."""
+
+    def __init__(self, problem: Problem, waits: bool, seed: int, seconds: float) -> None:
+        import threading
+
+        self.done = threading.Event()
+        """Set when CP-SAT proved the optimum (or infeasibility): the tree stops."""
+        self._solver: Any = None
+        self._stopped = False
+        self._ready = threading.Event()
+        self._result: Result | None = None
+        self._thread = threading.Thread(
+            target=self._run, args=(problem, waits, seed, max(0.05, seconds)), daemon=True
+        )
+        self._thread.start()
+        # let it build its model before the tree search takes the GIL (the
+        # compiled kernel holds it through each call): the solve itself runs without it
+        self._ready.wait(timeout=max(0.05, seconds))
+
+    def _run(self, problem: Problem, waits: bool, seed: int, seconds: float) -> None:
+        from scheduler import result as _result
+        from scheduler.cpsat import solve_cpsat
+
+        _ = _result
+        try:
+            r = solve_cpsat(
+                problem,
+                seconds,
+                seed,
+                waits=waits,
+                workers=1,
+                on_solver=self._keep,
+                callback=False,
+            )
+            self._result = r
+            if r.status in (SolveStatus.OPTIMAL, SolveStatus.INFEASIBLE):
+                self.done.set()
+        except Exception as exc:  # pragma: no cover - the tree's own result stands
+            self._result = None
+            self.error = repr(exc)
+        finally:
+            self._ready.set()
+
+    def _keep(self, solver: Any) -> None:
+        self._solver = solver
+        self._ready.set()
+        if self._stopped:  # stopped before it started: let it end at once
+            solver.parameters.max_time_in_seconds = 0.0
+
+    def stop(self) -> None:
+        """Ask CP-SAT to stop now."""
+        self._stopped = True
+        s = self._solver
+        if s is not None:
+            s.stop_search()
+
+    def result(self) -> Result | None:
+        """Stop CP-SAT if it still runs, and return its result."""
+        if self._thread.is_alive():
+            self.stop()
+        self._thread.join()
+        return self._result
 
 
 def solve_tree(
@@ -295,6 +403,17 @@ def solve_tree(
     proven = False
     can_prove, why = exact.applicable(p, opt.exact_max_tasks)
     stats.extra["exact"] = "applicable" if can_prove else why
+    race = None
+    if (
+        time_limit is not None
+        and opt.max_evaluations is None
+        and p.n_tasks <= opt.portfolio_max_tasks
+        and (best is None or best.makespan > lb + 1e-9)
+    ):
+        race = _Race(p, waits, seed, deadline - time.perf_counter())
+        ev.stop = race.done
+        can_prove = False  # CP-SAT is the proof here (measured faster than the exact B&B)
+        stats.extra["exact"] = "left to the racing CP-SAT"
     members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
     remaining = deadline - time.perf_counter()
     if (
@@ -302,6 +421,7 @@ def solve_tree(
         and time_limit is not None
         and opt.max_evaluations is None
         and not can_prove
+        and race is None
         and remaining >= opt.parallel_min_time
         and "fork" in multiprocessing.get_all_start_methods()
         and (best is None or best.makespan > lb + 1e-9)
@@ -322,89 +442,103 @@ def solve_tree(
     work_limit = opt.max_evaluations
 
     def out_of_time() -> bool:
-        return time.perf_counter() >= deadline or (
-            work_limit is not None and ev.evaluations >= work_limit
+        return (
+            time.perf_counter() >= deadline
+            or (work_limit is not None and ev.evaluations >= work_limit)
+            or (race is not None and race.done.is_set())
         )
 
-    while not out_of_time():
-        if best is not None and best.makespan <= lb + 1e-9:
-            proven = True
-            break
-        if can_prove and (time_limit is None or rounds >= 2):
-            ph = time.perf_counter()
-            nodes = opt.exact_max_nodes
-            if nodes is None and work_limit is not None:
-                nodes = 100 * work_limit
-            res = exact.branch_and_bound(
-                p, best.makespan if best else math.inf, deadline, waits, nodes
-            )
-            stats.nodes += res.nodes
-            stats.pruned += res.pruned
-            stats.phases["exact"] = stats.phases.get("exact", 0.0) + time.perf_counter() - ph
-            if res.schedule is not None:
-                sched = res.schedule
-                order = np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64)
-                sol = ev.evaluate(order, sched.mode.copy())
-                if sol is not None and sol.makespan <= res.makespan + 1e-9:
-                    offer(sol)
-                else:  # the decoder cannot reproduce it: keep the exact schedule itself
-                    stats.extra["exact_schedule"] = sched
-                    offer(
-                        Solution(
-                            order, sched.mode.copy(), res.makespan, float(sched.end.sum()), None
-                        )
-                    )
-            if res.complete:
+    try:
+        while not out_of_time():
+            if best is not None and best.makespan <= lb + 1e-9:
                 proven = True
                 break
-            can_prove = False  # out of budget for the proof: go on with the heuristics
-            continue
-        rounds += 1
-        # a beam pass (widths 1, 2, 4, ...): new starting points
-        if width <= opt.max_width:
-            ph = time.perf_counter()
-            budget = (deadline - ph) * opt.beam_share if math.isfinite(deadline) else math.inf
-            offer(
-                beam_pass(ev, width, ph + budget, best.makespan if best else math.inf, rng, stats)
-            )
-            stats.phases["beam"] = stats.phases.get("beam", 0.0) + time.perf_counter() - ph
-            width *= 2
-        if best is None:
-            offer(ev.evaluate(priority_order(p, rng=rng, noise=opt.restart_noise)))
-            if best is None:
-                if time_limit is None and width > opt.max_width and rounds > 12:
-                    break  # nothing schedulable found after a fair effort: give up (status unknown)
+            if can_prove and (time_limit is None or rounds >= 2):
+                ph = time.perf_counter()
+                nodes = opt.exact_max_nodes
+                if nodes is None and work_limit is not None:
+                    nodes = 100 * work_limit
+                res = exact.branch_and_bound(
+                    p, best.makespan if best else math.inf, deadline, waits, nodes, ev.stop
+                )
+                stats.nodes += res.nodes
+                stats.pruned += res.pruned
+                stats.phases["exact"] = stats.phases.get("exact", 0.0) + time.perf_counter() - ph
+                if res.schedule is not None:
+                    sched = res.schedule
+                    order = np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64)
+                    sol = ev.evaluate(order, sched.mode.copy())
+                    if sol is not None and sol.makespan <= res.makespan + 1e-9:
+                        offer(sol)
+                    else:  # the decoder cannot reproduce it: keep the exact schedule itself
+                        stats.extra["exact_schedule"] = sched
+                        offer(
+                            Solution(
+                                order, sched.mode.copy(), res.makespan, float(sched.end.sum()), None
+                            )
+                        )
+                if res.complete:
+                    proven = True
+                    break
+                can_prove = False  # out of budget for the proof: go on with the heuristics
                 continue
-        # improvement: tabu search on arm sequences (list local search with a blocking oracle)
-        ph = time.perf_counter()
-        slice_end = deadline
-        if math.isfinite(deadline) and width <= opt.max_width:
-            slice_end = ph + (deadline - ph) * opt.improve_share
-        evals = None
-        if work_limit is not None:
-            evals = min(opt.local_evaluations, max(1, work_limit - ev.evaluations))
-        elif not math.isfinite(deadline):
-            evals = opt.local_evaluations
-        if ev.blocking or best.state is None:
-            improved = local_search(
-                ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
-            )
-        else:
-            improved = tabu_search(
-                ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
-            )
-        offer(improved)
-        stats.phases["improve"] = stats.phases.get("improve", 0.0) + time.perf_counter() - ph
-        if (
-            time_limit is None
-            and work_limit is None
-            and not can_prove
-            and width > opt.max_width
-            and rounds > 12
-        ):
-            break  # unlimited budget on a big problem: stop after a fair effort
+            rounds += 1
+            # a beam pass (widths 1, 2, 4, ...): new starting points
+            if width <= opt.max_width:
+                ph = time.perf_counter()
+                budget = (deadline - ph) * opt.beam_share if math.isfinite(deadline) else math.inf
+                offer(
+                    beam_pass(
+                        ev, width, ph + budget, best.makespan if best else math.inf, rng, stats
+                    )
+                )
+                stats.phases["beam"] = stats.phases.get("beam", 0.0) + time.perf_counter() - ph
+                width *= 2
+            if best is None:
+                offer(ev.evaluate(priority_order(p, rng=rng, noise=opt.restart_noise)))
+                if best is None:
+                    if rounds >= 3:
+                        break  # list decoding dead-locks here: the exact fallback takes over
+                    continue
+            # improvement: tabu search on arm sequences (list local search with a blocking oracle)
+            ph = time.perf_counter()
+            slice_end = deadline
+            if math.isfinite(deadline) and width <= opt.max_width:
+                slice_end = ph + (deadline - ph) * opt.improve_share
+            evals = None
+            if work_limit is not None:
+                evals = min(opt.local_evaluations, max(1, work_limit - ev.evaluations))
+            elif not math.isfinite(deadline):
+                evals = opt.local_evaluations
+            if ev.blocking or best.state is None:
+                improved = local_search(
+                    ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
+                )
+            else:
+                improved = tabu_search(
+                    ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
+                )
+            offer(improved)
+            stats.phases["improve"] = stats.phases.get("improve", 0.0) + time.perf_counter() - ph
+            if (
+                time_limit is None
+                and work_limit is None
+                and not can_prove
+                and width > opt.max_width
+                and rounds > 12
+            ):
+                break  # unlimited budget on a big problem: stop after a fair effort
+    except KeyboardInterrupt:
+        stats.interrupted = True  # Ctrl-C: keep the best schedule found so far
+        if race is not None:
+            race.stop()
+        for member, _pipe in members:
+            member.terminate()
     stats.evaluations = ev.evaluations
     for member, pipe in members:
+        if stats.interrupted:
+            member.join(timeout=1.0)
+            continue
         got = pipe.recv() if pipe.poll(max(0.05, deadline - time.perf_counter() + 2.0)) else None
         member.join(timeout=1.0)
         if member.is_alive():  # pragma: no cover - a worker that did not stop in time
@@ -432,6 +566,52 @@ def solve_tree(
             stats.evaluations += int(got[7])
         elif isinstance(got, tuple) and got and got[0] == "error":
             stats.extra["worker_error"] = got[1]
+    if race is not None:
+        cp = race.result()
+        stats.extra["portfolio"] = cp.status.value if cp is not None else "none"
+        if cp is not None:
+            if cp.schedule is not None and (best is None or cp.objective < best.makespan - 1e-9):
+                stats.record(time.perf_counter() - t0, cp.objective)
+                sched = cp.schedule
+                stats.extra["exact_schedule"] = sched
+                best = Solution(
+                    np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64),
+                    sched.mode.copy(),
+                    cp.objective,
+                    float(sched.end.sum()),
+                    None,
+                )
+            lb = max(lb, cp.bound)
+            if cp.status is SolveStatus.OPTIMAL and best is not None:
+                proven = best.makespan <= cp.objective + 1e-9
+            elif cp.status is SolveStatus.INFEASIBLE:
+                proven = True
+    if best is None and not proven and opt.fallback and not stats.interrupted:
+        # no list order decodes (start zones dead-locking): ask CP-SAT within the budget left
+        from scheduler.fallback import exact_fallback
+
+        left = None if time_limit is None else deadline - time.perf_counter()
+        left_evals = None if work_limit is None else max(1, work_limit - stats.evaluations)
+        ph = time.perf_counter()
+        fb = exact_fallback(p, waits=waits, seed=seed, time_limit=left, max_evaluations=left_evals)
+        stats.phases["fallback"] = time.perf_counter() - ph
+        stats.extra["fallback"] = fb.status.value
+        stats.nodes += fb.stats.nodes
+        if fb.schedule is not None:
+            stats.record(time.perf_counter() - t0, fb.objective)
+            sched = fb.schedule
+            stats.extra["exact_schedule"] = sched
+            best = Solution(
+                np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64),
+                sched.mode.copy(),
+                fb.objective,
+                float(sched.end.sum()),
+                None,
+            )
+            if fb.status is SolveStatus.OPTIMAL:
+                proven = True
+        elif fb.status is SolveStatus.INFEASIBLE:
+            proven = True
     return _finish(p, ev, best, lb, t0, seed, stats, proven)
 
 

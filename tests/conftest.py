@@ -43,3 +43,9 @@ def cell8_tasks():  # type: ignore[no-untyped-def]
     from tasklib import load_example
 
     return load_example("cell8")
+
+
+@pytest.fixture(params=["tree", "greedy", "cpsat"])
+def any_solver(request: pytest.FixtureRequest) -> str:
+    """Each solver of :func:`scheduler.solve` in turn: a test taking it runs once per solver."""
+    return str(request.param)

@@ -275,24 +275,11 @@ def test_fjsp_small_instances_are_solved_to_optimality(tmp_path) -> None:  # typ
     from scheduler import parse_fjsp
 
     p = parse_fjsp("3 3 2\n2 2 1 3 2 2  1 3 4\n2 1 2 3  2 1 2 3 1\n1 2 1 4 3 2\n")
-    results = {s: solve(p, s, time_limit=10) for s in SOLVERS}
-    assert results["tree"].objective == results["cpsat"].objective
-    assert results["greedy"].objective >= results["tree"].objective
+    results = {s: solve(p, s, time_limit=None) for s in SOLVERS}
+    for s in ("tree", "cpsat"):  # the known optimum is 7
+        assert results[s].status.value == "optimal" and results[s].objective == 7.0, s
+    assert results["greedy"].objective >= 7.0
     _ = itertools
-
-
-def test_unschedulable_problem_ends_without_a_schedule() -> None:
-    # B stands in exclusive zone E for good (it has no task), and the only task needs E
-    m = Model()
-    m.add_zone("E")
-    m.add_arm("A")
-    m.add_arm("B", start_zones=["E"])
-    m.add_task("t")
-    m.add_mode("t", "A", 1.0, windows=[Window("E", 0.0, 1.0)])
-    p = m.build()
-    for solver in ("greedy", "tree"):
-        r = solve(p, solver, time_limit=None if solver == "tree" else 1.0)  # type: ignore[arg-type]
-        assert r.schedule is None and r.status.value in ("unknown", "infeasible")
 
 
 def test_parallel_workers_return_a_valid_schedule() -> None:
