@@ -13,7 +13,8 @@
 from scheduler.bounds import LowerBounds, lower_bound, lower_bounds
 from scheduler.fjsp import parse_fjsp, read_fjsp
 from scheduler.greedy import GreedyOptions
-from scheduler.problem import BlockingOracle, Model, Problem, Window, load_problem, save_problem
+from scheduler.io import load_problem, problem_from_dict, save_problem
+from scheduler.problem import BlockingOracle, Model, Problem, Window
 from scheduler.result import Progress, Result, SearchStats, SolveStatus
 from scheduler.schedule import Reservation, Schedule, ScheduleError, validate
 from scheduler.setup import FunctionSetup, MatrixSetup, NoSetup, Setup, TravelSetup
@@ -48,6 +49,7 @@ __all__ = [
     "lower_bound",
     "lower_bounds",
     "parse_fjsp",
+    "problem_from_dict",
     "read_fjsp",
     "save_problem",
     "solve",

@@ -45,26 +45,27 @@ Examples
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
-from os import PathLike
-from pathlib import Path
 from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
-from multiarm.errors import CycleError, FormatError, ValidationError
+from multiarm.errors import CycleError, ValidationError
 from multiarm.graph import find_cycle
 from multiarm.types import BoolArray, FloatArray, IntArray
 from scheduler.setup import BoundSetup, NoSetup, Setup, setup_from_dict
 from scheduler.timing import Shapes
 
-__all__ = ["BlockingOracle", "Model", "Problem", "Window", "load_problem", "save_problem"]
+__all__ = ["BlockingOracle", "Model", "Problem", "Window"]
 
 WindowKind = Literal["occupy", "move"]
+
+MAX_TIME = 1e9
+"""Largest time (seconds, about 32 years) a problem may state: beyond it the
+solvers' arithmetic (float sums, CP-SAT's integer scaling) is no longer exact."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -325,66 +326,6 @@ class Problem:
             "setup": self.setup.to_dict(),
         }
 
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any], blocking: BlockingOracle | None = None) -> Problem:
-        """Inverse of :meth:`to_dict` (validated like :meth:`Model.build`)."""
-        try:
-            if data.get("format", "multiarm.problem/1") != "multiarm.problem/1":
-                raise FormatError(f"unsupported problem format {data.get('format')!r}")
-            m = Model(str(data.get("name", "problem")))
-            for z in data.get("zones", []):
-                m.add_zone(z["name"], z.get("policy", "exclusive"))
-            for k in data.get("tools", []):
-                m.add_tool(k)
-            for a in data["arms"]:
-                m.add_arm(
-                    a["name"],
-                    available=a.get("available", 0.0),
-                    capabilities=a.get("capabilities", ()),
-                    start_zones=a.get("start_zones", ()),
-                )
-            for t in data["tasks"]:
-                m.add_task(t["name"], release=t.get("release", 0.0), group=t.get("group", -1))
-            for t in data["tasks"]:
-                m.add_predecessors(t["name"], t.get("predecessors", []))
-                for md in t.get("modes", []):
-                    m.add_mode(
-                        t["name"],
-                        md["arm"],
-                        md["duration"],
-                        windows=[
-                            Window(w["zone"], w["start"], w["end"], w.get("kind", "occupy"))
-                            for w in md.get("windows", [])
-                        ],
-                        tools=md.get("tools", []),
-                    )
-            setup = data.get("setup")
-            if setup is not None:
-                m._setup_dict = setup
-            m.set_blocking(blocking)
-            return m.build()
-        except (KeyError, TypeError) as exc:
-            raise FormatError(f"malformed problem data: missing or wrong field {exc}") from None
-
-
-def save_problem(problem: Problem, path: str | PathLike[str]) -> Path:
-    """Write ``problem`` as JSON."""
-    p = Path(path)
-    p.write_text(json.dumps(problem.to_dict(), indent=1, allow_nan=False) + "\n", encoding="utf-8")
-    return p
-
-
-def load_problem(path: str | PathLike[str], blocking: BlockingOracle | None = None) -> Problem:
-    """Read a problem written by :func:`save_problem`."""
-    p = Path(path)
-    try:
-        data = json.loads(p.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise FormatError(f"cannot read problem file: {exc.strerror}", filename=str(p)) from None
-    except json.JSONDecodeError as exc:
-        raise FormatError(exc.msg, filename=str(p), line=exc.lineno, column=exc.colno) from None
-    return Problem.from_dict(data, blocking)
-
 
 # ---------------------------------------------------------------- builder
 
@@ -547,6 +488,11 @@ class Model:
                 raise ValidationError(
                     f"arm {arm.name!r}: available time must be finite and >= 0, got {arm.available}"
                 )
+            if arm.available > MAX_TIME:
+                raise ValidationError(
+                    f"arm {arm.name!r}: available time {arm.available:g} s is beyond the largest "
+                    f"time the solvers handle ({MAX_TIME:g} s)"
+                )
         start_zones = []
         for arm in self._arms:
             zs = tuple(sorted({self._index(z, self._zones, "zone") for z in arm.start_zones}))
@@ -563,6 +509,11 @@ class Model:
             if not (math.isfinite(task.release) and task.release >= 0):
                 raise ValidationError(
                     f"task {task.name!r}: release must be finite and >= 0, got {task.release}"
+                )
+            if task.release > MAX_TIME:
+                raise ValidationError(
+                    f"task {task.name!r}: release {task.release:g} s is beyond the largest time "
+                    f"the solvers handle ({MAX_TIME:g} s)"
                 )
             ps = []
             for p in task.preds:
@@ -611,6 +562,11 @@ class Model:
             if not (math.isfinite(md.duration) and md.duration >= 0):
                 raise ValidationError(
                     f"{where}: duration must be finite and >= 0, got {md.duration}"
+                )
+            if md.duration > MAX_TIME:
+                raise ValidationError(
+                    f"{where}: duration {md.duration:g} s is beyond the largest time the "
+                    f"solvers handle ({MAX_TIME:g} s)"
                 )
             m = len(mode_task)
             for w in md.windows:

@@ -25,12 +25,14 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from multiarm import MultiarmError, __version__
+from multiarm.errors import UsageError
 
 __all__ = ["main"]
 
@@ -210,6 +212,19 @@ def cmd_schedule(args: argparse.Namespace) -> int:
 
     from scheduler import lower_bound, solve
 
+    if args.out:  # checked before any work, so a solved schedule is never lost
+        out = Path(args.out)
+        if out.is_dir():
+            raise UsageError(f"--out: {str(out)!r} is a directory")
+        parent = out.parent if str(out.parent) else Path(".")
+        if not parent.is_dir():
+            raise UsageError(f"--out: directory {str(parent)!r} does not exist")
+        if not os.access(parent, os.W_OK):
+            raise UsageError(f"--out: directory {str(parent)!r} is not writable")
+    if not (math.isfinite(args.time_limit) and args.time_limit > 0):
+        raise UsageError(
+            f"--time-limit must be a finite number of seconds > 0, got {args.time_limit}"
+        )
     problem = _load_schedulable(args.problem)
     print(f"{problem!r}; lower bound {lower_bound(problem):.6g}")
     result = solve(
@@ -217,7 +232,11 @@ def cmd_schedule(args: argparse.Namespace) -> int:
     )
     print(result.summary())
     if result.schedule is not None and args.out:
-        Path(args.out).write_text(json.dumps(result.schedule.to_dict(problem), indent=1) + "\n")
+        try:
+            Path(args.out).write_text(json.dumps(result.schedule.to_dict(problem), indent=1) + "\n")
+        except OSError as exc:
+            print(json.dumps(result.schedule.to_dict(problem)))  # keep the result
+            raise UsageError(f"--out: cannot write {args.out!r}: {exc.strerror}") from None
         print(f"schedule written to {args.out}")
     return 0 if result.schedule is not None else 1
 

@@ -240,7 +240,7 @@ def test_json_round_trip(tmp_path: Path) -> None:
     with pytest.raises(FormatError, match="unsupported problem format"):
         load_problem(tmp_path / "bad.json")
     (tmp_path / "bad2.json").write_text('{"zones": []}')
-    with pytest.raises(FormatError, match="missing or wrong field"):
+    with pytest.raises(FormatError, match=r"bad2\.json: missing key 'arms'"):
         load_problem(tmp_path / "bad2.json")
 
 

@@ -1,0 +1,255 @@
+"""Problems as JSON: a reader that type-checks every field and names the place.
+
+:func:`load_problem` / :func:`problem_from_dict` read what
+:func:`save_problem` / :meth:`Problem.to_dict` write. Every mistake is a
+:class:`~multiarm.errors.FormatError` naming the file and the JSON path
+(``p.json: tasks[3].modes[0].duration: expected a number, got 'abc'``); a
+rule broken across records (an unknown predecessor, a cycle, a window outside
+its mode) is the :class:`~multiarm.errors.ValidationError` of
+:meth:`Model.build`, with the file named in front. Strings are never taken
+for lists, booleans never for numbers, and unknown keys are refused.
+
+Examples
+--------
+>>> problem_from_dict({"arms": [{"name": "a"}], "tasks": [{"name": "t", "modes": [
+...     {"arm": "a", "duration": "abc"}]}]}, filename="p.json")
+Traceback (most recent call last):
+...
+multiarm.errors.FormatError: p.json: tasks[0].modes[0].duration: expected a number, got 'abc'
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from os import PathLike, fspath
+from pathlib import Path
+from typing import Any
+
+from multiarm.errors import FormatError, ValidationError
+from scheduler.problem import BlockingOracle, Model, Problem, Window
+
+__all__ = ["load_problem", "problem_from_dict", "save_problem"]
+
+FORMAT = "multiarm.problem/1"
+
+
+class _Reader:
+    def __init__(self, filename: str | None) -> None:
+        self.filename = filename
+
+    def fail(self, where: str, message: str) -> FormatError:
+        return FormatError(f"{where}: {message}" if where else message, filename=self.filename)
+
+    def table(
+        self,
+        value: Any,
+        where: str,
+        keys: set[str],
+        required: frozenset[str] | set[str] = frozenset(),
+    ) -> Mapping[str, Any]:
+        if not isinstance(value, Mapping):
+            raise self.fail(where, f"expected an object, got {_show(value)}")
+        unknown = sorted(set(value) - keys)
+        if unknown:
+            raise self.fail(where, f"unknown key {unknown[0]!r} (known: {', '.join(sorted(keys))})")
+        missing = sorted(required - set(value))
+        if missing:
+            raise self.fail(where, f"missing key {missing[0]!r}")
+        return value
+
+    def items(self, value: Any, where: str) -> list[Any]:
+        if not isinstance(value, list):
+            raise self.fail(where, f"expected a list, got {_show(value)}")
+        return value
+
+    def name(self, value: Any, where: str) -> str:
+        if not isinstance(value, str) or not value:
+            raise self.fail(where, f"expected a non-empty string, got {_show(value)}")
+        return value
+
+    def names(self, value: Any, where: str) -> list[str]:
+        return [self.name(v, f"{where}[{i}]") for i, v in enumerate(self.items(value, where))]
+
+    def number(self, value: Any, where: str) -> float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.fail(where, f"expected a number, got {_show(value)}")
+        x = float(value)
+        if not math.isfinite(x):
+            raise self.fail(where, f"expected a finite number, got {value!r}")
+        return x
+
+    def integer(self, value: Any, where: str) -> int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.fail(where, f"expected an integer, got {_show(value)}")
+        return int(value)
+
+
+def _show(value: Any) -> str:
+    if isinstance(value, str | int | float | bool) or value is None:
+        return repr(value)
+    return f"a {type(value).__name__}"
+
+
+_TOP = {"format", "name", "arms", "zones", "tools", "tasks", "setup"}
+_ARM = {"name", "available", "capabilities", "start_zones"}
+_TASK = {"name", "release", "predecessors", "group", "modes"}
+_MODE = {"arm", "duration", "windows", "tools"}
+_WINDOW = {"zone", "start", "end", "kind"}
+
+
+def _setup(r: _Reader, value: Any) -> dict[str, Any]:
+    s = r.table(
+        value,
+        "setup",
+        {"kind", "times", "start", "end", "home", "speed", "base", "metric"},
+        {"kind"},
+    )
+    kind = s["kind"]
+    if kind not in ("none", "matrix", "travel"):
+        raise r.fail("setup.kind", f"expected 'none', 'matrix' or 'travel', got {_show(kind)}")
+    if kind == "matrix":
+        times = r.items(s.get("times"), "setup.times")
+        for a, rows in enumerate(times):
+            for i, row in enumerate(r.items(rows, f"setup.times[{a}]")):
+                for j, v in enumerate(r.items(row, f"setup.times[{a}][{i}]")):
+                    r.number(v, f"setup.times[{a}][{i}][{j}]")
+    if kind == "travel":
+        for key in ("start", "end", "home", "speed", "base"):
+            if key not in s:
+                raise r.fail("setup", f"missing key {key!r}")
+    return dict(s)
+
+
+def problem_from_dict(
+    data: Any, *, filename: str | None = None, blocking: BlockingOracle | None = None
+) -> Problem:
+    """Build and validate a problem from JSON data (see the module docstring).
+
+    Raises
+    ------
+    FormatError
+        A field of the wrong type, a missing or unknown key, naming the path.
+    ValidationError, CycleError
+        A rule of :meth:`Model.build` (the file named in front).
+    """
+    r = _Reader(filename)
+    if isinstance(data, Mapping) and data.get("format", FORMAT) != FORMAT:
+        raise r.fail(
+            "format",
+            f"unsupported problem format {_show(data.get('format'))} (expected {FORMAT!r})",
+        )
+    top = r.table(data, "", _TOP, {"arms", "tasks"})
+    if top.get("format", FORMAT) != FORMAT:  # pragma: no cover - checked above
+        raise r.fail(
+            "format", f"unsupported problem format {_show(top.get('format'))} (expected {FORMAT!r})"
+        )
+    m = Model(r.name(top.get("name", "problem"), "name"))
+    for i, z in enumerate(r.items(top.get("zones", []), "zones")):
+        zt = r.table(z, f"zones[{i}]", {"name", "policy"}, {"name"})
+        policy = zt.get("policy", "exclusive")
+        if policy not in ("exclusive", "shared"):
+            raise r.fail(
+                f"zones[{i}].policy", f"expected 'exclusive' or 'shared', got {_show(policy)}"
+            )
+        m.add_zone(r.name(zt["name"], f"zones[{i}].name"), policy)
+    for tool in r.names(top.get("tools", []), "tools"):
+        m.add_tool(tool)
+    for i, a in enumerate(r.items(top["arms"], "arms")):
+        w = f"arms[{i}]"
+        at = r.table(a, w, _ARM, {"name"})
+        m.add_arm(
+            r.name(at["name"], f"{w}.name"),
+            available=r.number(at.get("available", 0.0), f"{w}.available"),
+            capabilities=r.names(at.get("capabilities", []), f"{w}.capabilities"),
+            start_zones=r.names(at.get("start_zones", []), f"{w}.start_zones"),
+        )
+    tasks = r.items(top["tasks"], "tasks")
+    for i, t in enumerate(tasks):
+        w = f"tasks[{i}]"
+        tt = r.table(t, w, _TASK, {"name"})
+        m.add_task(
+            r.name(tt["name"], f"{w}.name"),
+            release=r.number(tt.get("release", 0.0), f"{w}.release"),
+            group=r.integer(tt.get("group", -1), f"{w}.group"),
+        )
+    for i, tt in enumerate(tasks):
+        w = f"tasks[{i}]"
+        m.add_predecessors(tt["name"], r.names(tt.get("predecessors", []), f"{w}.predecessors"))
+        for j, md in enumerate(r.items(tt.get("modes", []), f"{w}.modes")):
+            wm = f"{w}.modes[{j}]"
+            mt = r.table(md, wm, _MODE, {"arm", "duration"})
+            windows = []
+            for k, win in enumerate(r.items(mt.get("windows", []), f"{wm}.windows")):
+                ww = f"{wm}.windows[{k}]"
+                wt = r.table(win, ww, _WINDOW, {"zone", "start", "end"})
+                kind = wt.get("kind", "occupy")
+                if kind not in ("occupy", "move"):
+                    raise r.fail(f"{ww}.kind", f"expected 'occupy' or 'move', got {_show(kind)}")
+                windows.append(
+                    Window(
+                        r.name(wt["zone"], f"{ww}.zone"),
+                        r.number(wt["start"], f"{ww}.start"),
+                        r.number(wt["end"], f"{ww}.end"),
+                        kind,
+                    )
+                )
+            m.add_mode(
+                tt["name"],
+                r.name(mt["arm"], f"{wm}.arm"),
+                r.number(mt["duration"], f"{wm}.duration"),
+                windows=windows,
+                tools=r.names(mt.get("tools", []), f"{wm}.tools"),
+            )
+    if "setup" in top:
+        m._setup_dict = _setup(r, top["setup"])
+    m.set_blocking(blocking)
+    try:
+        return m.build()
+    except ValidationError as exc:
+        if filename:
+            exc.args = (f"{filename}: {exc.args[0]}", *exc.args[1:])
+        raise
+    except (KeyError, TypeError, IndexError) as exc:  # a setup table of the wrong shape
+        raise r.fail("setup", f"malformed setup data ({exc})") from None
+
+
+def save_problem(problem: Problem, path: str | PathLike[str]) -> Path:
+    """Write ``problem`` as JSON; returns the path.
+
+    Raises
+    ------
+    FormatError
+        When the file cannot be written (the problem is kept in memory).
+    """
+    p = Path(path)
+    text = json.dumps(problem.to_dict(), indent=1, allow_nan=False) + "\n"
+    try:
+        p.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise FormatError(
+            f"cannot write problem file: {exc.strerror}", filename=fspath(p)
+        ) from None
+    return p
+
+
+def load_problem(path: str | PathLike[str], blocking: BlockingOracle | None = None) -> Problem:
+    """Read a problem written by :func:`save_problem` (see the module docstring)."""
+    p = Path(path)
+    name = fspath(path)
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise FormatError(f"cannot read problem file: {exc.strerror}", filename=name) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise FormatError(f"problem file is not UTF-8 text ({exc.reason})", filename=name) from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FormatError(exc.msg, filename=name, line=exc.lineno, column=exc.colno) from None
+    except RecursionError:
+        raise FormatError("problem file is nested too deeply", filename=name) from None
+    return problem_from_dict(data, filename=name, blocking=blocking)
