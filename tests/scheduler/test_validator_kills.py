@@ -116,7 +116,7 @@ def test_the_initial_pose_can_block() -> None:
     # kills: "the initial pose never blocking"
     p = _blocked({(0, 1, -1): 1.5})
     validate(p, Schedule.from_starts(p, [0], [0.0], blocking=[1.5]))
-    with pytest.raises(ScheduleError, match="force 1.5"):
+    with pytest.raises(ScheduleError, match=r"force 1\.5"):
         validate(p, Schedule.from_starts(p, [0], [0.0], blocking=[0.0]))
 
 
@@ -124,7 +124,7 @@ def test_detours_around_two_parked_arms_add_up() -> None:
     # kills: "detours combined by max instead of sum"
     p = _blocked({(0, 1, -1): 1.5, (0, 2, -1): 1.0})
     validate(p, Schedule.from_starts(p, [0], [0.0], blocking=[2.5]))
-    with pytest.raises(ScheduleError, match="force 2.5"):
+    with pytest.raises(ScheduleError, match=r"force 2\.5"):
         validate(p, Schedule.from_starts(p, [0], [0.0], blocking=[1.5]))
 
 
