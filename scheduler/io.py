@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from multiarm.errors import FormatError, ValidationError
+from multiarm.text import read_source
 from scheduler.problem import BlockingOracle, Model, Problem, Window
 
 __all__ = ["load_problem", "problem_from_dict", "save_problem"]
@@ -236,16 +237,8 @@ def save_problem(problem: Problem, path: str | PathLike[str]) -> Path:
 
 def load_problem(path: str | PathLike[str], blocking: BlockingOracle | None = None) -> Problem:
     """Read a problem written by :func:`save_problem` (see the module docstring)."""
-    p = Path(path)
     name = fspath(path)
-    try:
-        raw = p.read_bytes()
-    except OSError as exc:
-        raise FormatError(f"cannot read problem file: {exc.strerror}", filename=name) from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise FormatError(f"problem file is not UTF-8 text ({exc.reason})", filename=name) from None
+    text = read_source(path, FormatError, "problem")
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:

@@ -28,17 +28,18 @@ def test_import_contracts_hold() -> None:
     assert "4 kept, 0 broken" in proc.stdout
 
 
-def test_a_second_fcl_importer_is_detected(tmp_path: Path) -> None:
-    # FCL stays behind workcell.geometry.world: another workcell module
-    # importing it breaks a contract.
+def _lint_with_bad_module(
+    tmp_path: Path, where: str, code: str
+) -> subprocess.CompletedProcess[str]:
+    """Run the contracts on a copy of the tree with one bad module added."""
     import shutil
 
     for pkg in PACKAGES:
         shutil.copytree(ROOT / pkg, tmp_path / pkg, ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
-    (tmp_path / "workcell" / "_bad.py").write_text("import fcl\n")
+    (tmp_path / where / "_bad.py").write_text(code)
     lint = Path(sys.executable).with_name("lint-imports")
-    proc = subprocess.run(
+    return subprocess.run(
         [str(lint), "--config", str(tmp_path / "pyproject.toml")],
         cwd=tmp_path,
         capture_output=True,
@@ -46,6 +47,12 @@ def test_a_second_fcl_importer_is_detected(tmp_path: Path) -> None:
         check=False,
         env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"},
     )
+
+
+def test_a_second_fcl_importer_is_detected(tmp_path: Path) -> None:
+    # FCL stays behind workcell.geometry.world: another workcell module
+    # importing it breaks a contract.
+    proc = _lint_with_bad_module(tmp_path, "workcell", "import fcl\n")
     assert proc.returncode != 0
     assert "workcell._bad -> fcl" in proc.stdout
 
@@ -53,21 +60,7 @@ def test_a_second_fcl_importer_is_detected(tmp_path: Path) -> None:
 def test_a_broken_layer_is_detected(tmp_path: Path) -> None:
     # The contract must be able to fail: a copy of the tree in which zones
     # imports scheduler breaks it.
-    import shutil
-
-    for pkg in PACKAGES:
-        shutil.copytree(ROOT / pkg, tmp_path / pkg, ignore=shutil.ignore_patterns("__pycache__"))
-    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
-    (tmp_path / "zones" / "_bad.py").write_text("import scheduler\n")
-    lint = Path(sys.executable).with_name("lint-imports")
-    proc = subprocess.run(
-        [str(lint), "--config", str(tmp_path / "pyproject.toml")],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        check=False,
-        env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"},
-    )
+    proc = _lint_with_bad_module(tmp_path, "zones", "import scheduler\n")
     assert proc.returncode != 0
     assert "zones._bad -> scheduler" in proc.stdout
 

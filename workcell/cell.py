@@ -55,6 +55,7 @@ from typing import Any, Literal
 import numpy as np
 
 from multiarm.errors import FormatError, MultiarmError, ValidationError
+from multiarm.text import read_source
 from multiarm.types import JointVector
 from tasklib import TaskSet
 from tasklib.examples import EXAMPLES as TASK_EXAMPLES
@@ -391,14 +392,7 @@ def load_cell(path: str | PathLike[str]) -> Cell:
     """
     p = Path(path)
     name = fspath(path)
-    try:
-        raw = p.read_bytes()
-    except OSError as exc:
-        raise FormatError(f"cannot read cell file: {exc.strerror}", filename=name) from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise FormatError(f"cell file is not UTF-8 text ({exc.reason})", filename=name) from None
+    text = read_source(path, FormatError, "cell")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
