@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from multiarm.types import FloatArray, IntArray
-from scheduler.kernel import EPS, State, compiled, decode, to_schedule
+from scheduler.kernel import State, compiled, decode, to_schedule
+from scheduler.kernel import place_blocking as kernel_place_blocking
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
 
@@ -126,7 +127,6 @@ class Evaluator:
         self.blocking = problem.blocking is not None
         self.chrono = self.blocking if chronological is None else (chronological or self.blocking)
         self.evaluations = 0
-        self._oracle_cache: dict[tuple[int, int, int], float] = {}
         self.base = base
         self.release = release
         self.allowed = allowed
@@ -149,108 +149,26 @@ class Evaluator:
         fixed = np.full(self.problem.n_tasks, -1, dtype=np.int64) if modes is None else modes
         if state is None and self.base is not None:
             state = self.base.copy()
-        if not self.blocking:
-            code, st = decode(
-                self.inst,
-                order,
-                fixed,
-                chrono=self.chrono,
-                waits=self.waits,
-                state=state,
-                release=self.release,
-                allowed=self.allowed,
-                arm_lb=self.arm_lb,
-            )
-            return code == 0, st
-        return self._decode_blocking(order, fixed, state)
-
-    def cost(self, st: State, m: int, S: float) -> float:
-        """Detour cost the oracle charges mode ``m`` starting at ``S`` in ``st``."""
-        p = self.problem
-        oracle = p.blocking
-        assert oracle is not None
-        a = int(p.mode_arm[m])
-        total = 0.0
-        inst = self.inst
-        for b in range(p.n_arms):
-            if b == a:
-                continue
-            n = int(st.arm_n[b])
-            if n == 0:
-                pose = -1
-            else:
-                last = int(st.arm_t[inst.arm_lo[b] + n - 1])
-                if st.t_end[last] > S + EPS:
-                    continue  # working (or travelling) at S
-                pose = last
-            key = (m, b, pose)
-            c = self._oracle_cache.get(key)
-            if c is None:
-                c = float(oracle.cost(m, b, pose))
-                if not (c >= 0.0):
-                    raise ValueError(
-                        f"blocking oracle returned {c} for mode {m}, arm {b}, pose {pose}"
-                    )
-                self._oracle_cache[key] = c
-            total += c
-        return total
+        # with a blocking oracle the kernel decodes chronologically and reads
+        # the oracle's answers from its compiled table (asking only the new ones)
+        code, st = decode(
+            self.inst,
+            order,
+            fixed,
+            chrono=self.chrono,
+            waits=self.waits,
+            state=state,
+            release=self.release,
+            allowed=self.allowed,
+            arm_lb=self.arm_lb,
+        )
+        return code == 0, st
 
     def place_blocking(
         self, st: State, t: int, m: int, S0: float
     ) -> tuple[float, float, int, FloatArray, float]:
         """Chronological placement with the oracle's detour cost: (S, end, slot, waits, cost)."""
-        c = 0.0
-        while True:
-            S, end, k, w = self.inst.query(
-                st, t, m, S0, chrono=True, waits=self.waits, extra=c, arm_lb=self.arm_lb
-            )
-            if not math.isfinite(S):
-                return math.inf, math.inf, -1, w, 0.0
-            c2 = self.cost(st, m, S)
-            if math.isinf(c2):
-                return math.inf, math.inf, -1, w, c2
-            if c2 <= c + 1e-12:
-                return S, end, k, w, c
-            c = c2  # a later start can only see more arms parked: c grows to a fixpoint
-
-    def _decode_blocking(
-        self, order: IntArray, fixed: IntArray, state: State | None
-    ) -> tuple[bool, State]:
-        """Chronological decoding with the oracle. A task that cannot start yet
-        (a predecessor to come, a zone held, a parked arm in its way for good)
-        is deferred and retried after the others, as the kernel does."""
-        p = self.problem
-        st = self.inst.new_state() if state is None else state
-        pending = order.tolist()
-        while pending:
-            kept = []
-            for t in pending:
-                if any(st.t_mode[q] < 0 for q in p.task_preds[t]):
-                    kept.append(t)
-                    continue
-                S0 = self.inst.earliest(st, t, True, self.release)
-                best = (math.inf, math.inf, 0)
-                choice = None
-                for m in p.task_modes[t]:
-                    if (fixed[t] >= 0 and m != fixed[t]) or (
-                        self.allowed is not None and not self.allowed[m]
-                    ):
-                        continue
-                    S, end, k, w, c = self.place_blocking(st, t, m, S0)
-                    if not math.isfinite(end):
-                        continue
-                    key = (end, float(w.sum()) + c, m)
-                    if key < best:
-                        best, choice = key, (m, S, end, k, w)
-                if choice is None:
-                    kept.append(t)
-                    continue
-                m, S, end, k, w = choice
-                self.inst.commit(st, t, m, S, end, k, w)
-            if len(kept) == len(pending):
-                return False, st
-            pending = kept
-        return True, st
+        return kernel_place_blocking(self.inst, st, t, m, S0, waits=self.waits, arm_lb=self.arm_lb)
 
     def evaluate(self, order: IntArray, modes: IntArray | None = None) -> Solution | None:
         """Decode and wrap as a :class:`Solution` (None if incomplete)."""
