@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml constraints.txt
 		|| { echo "multiarm needs Python >= 3.11: run 'make PYTHON=python3.11 ...'"; exit 1; }
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check \
-		-c constraints.txt -e ".[analysis,dev]"
+		-c constraints.txt -e ".[analysis,dev,docs]"
 	@touch $(STAMP)
 
 demo: $(STAMP)
@@ -37,7 +37,7 @@ bench: $(STAMP)
 lock:
 	rm -rf .lock-venv
 	$(PYTHON) -m venv .lock-venv
-	.lock-venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[analysis,dev]"
+	.lock-venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[analysis,dev,docs]"
 	{ echo "# Lock file: exact versions for every install (make demo/test use it)."; \
 	  echo "# Regenerate with 'make lock' after changing pyproject.toml."; \
 	  .lock-venv/bin/python -m pip freeze --exclude-editable --all \
