@@ -174,7 +174,7 @@ class Arm(ABC):
         fr = self.frames(np.atleast_2d(q))
         idx = np.array([s.frame for s in self.shapes], dtype=np.int64)
         off = np.stack([s.offset for s in self.shapes])
-        out: FloatArray = np.einsum("nsij,sjk->nsik", fr[:, idx], off)
+        out: FloatArray = np.matmul(fr[:, idx], off)
         return out
 
     def within_limits(self, q: FloatArray, tol: float = 1e-9) -> BoolArray:

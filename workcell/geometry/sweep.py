@@ -53,7 +53,10 @@ Mesh zones go through FCL (:mod:`workcell.geometry.world`), one sample at a
 time: the grown shapes against the mesh surface, plus "shape centre inside
 the mesh" and "a mesh vertex inside the shape's capsule" for containment.
 
-Everything is vectorised over samples x shapes x zone solids, in chunks.
+The tests run over samples x shapes x zone solids in a compiled loop
+(:mod:`workcell.geometry._sweep_jit`, numba) that skips a zone once a sample
+touches it; the vectorised numpy versions are kept as the reference the tests
+compare it with.
 
 Examples
 --------
@@ -84,6 +87,7 @@ import numpy as np
 from multiarm.errors import UsageError, ValidationError
 from multiarm.types import BoolArray, FloatArray, IntArray
 from workcell.arms.base import Arm, LinkShape
+from workcell.geometry._sweep_jit import capsules_touch, contacts_block
 from workcell.geometry.world import CollisionWorld
 from zones.geometry import Primitive
 from zones.model import ZoneMap
@@ -298,8 +302,8 @@ def _segments(arm: Arm, q: FloatArray, local: FloatArray) -> tuple[FloatArray, F
     """World end points p0, p1 (N, S, 3) of the shapes' capsule segments."""
     tf = arm.shape_transforms(q)
     rot, trans = tf[..., :3, :3], tf[..., :3, 3]
-    p0 = np.einsum("nsij,sj->nsi", rot, local[:, 0], optimize=True) + trans
-    p1 = np.einsum("nsij,sj->nsi", rot, local[:, 1], optimize=True) + trans
+    p0 = np.matmul(rot, local[:, 0, :, None])[..., 0] + trans
+    p1 = np.matmul(rot, local[:, 1, :, None])[..., 0] + trans
     return p0, p1
 
 
@@ -424,7 +428,39 @@ def _scatter(out: BoolArray, hit: BoolArray, zone_ids: IntArray) -> None:
 def _contacts_block(
     p0: FloatArray, p1: FloatArray, rad: FloatArray, solids: _Solids, n_zones: int
 ) -> BoolArray:
-    """(N, Z) bool: capsules (p0, p1, rad) touch zone solids (conservative supersets)."""
+    """(N, Z) bool: capsules (p0, p1, rad) touch zone solids (conservative supersets).
+
+    The compiled loop of :mod:`workcell.geometry._sweep_jit`; it gives the
+    same answers as :func:`_contacts_block_numpy`, the vectorised reference.
+    """
+    out: BoolArray = contacts_block(
+        np.ascontiguousarray(p0),
+        np.ascontiguousarray(p1),
+        np.ascontiguousarray(rad, dtype=float),
+        solids.sph_c,
+        solids.sph_r,
+        solids.sph_z,
+        solids.box_r,
+        solids.box_c,
+        solids.box_h,
+        solids.box_z,
+        solids.cyl_r,
+        solids.cyl_c,
+        solids.cyl_rad,
+        solids.cyl_h,
+        solids.cyl_z,
+        solids.cvx_n,
+        solids.cvx_b,
+        solids.cvx_z,
+        n_zones,
+    )
+    return out
+
+
+def _contacts_block_numpy(
+    p0: FloatArray, p1: FloatArray, rad: FloatArray, solids: _Solids, n_zones: int
+) -> BoolArray:
+    """Vectorised numpy version of :func:`_contacts_block` (the tests' reference)."""
     n = p0.shape[0]
     out = np.zeros((n, n_zones), dtype=bool)
     d = p1 - p0  # (N, S, 3)
@@ -789,6 +825,27 @@ def arm_contacts(
     qa = np.atleast_2d(np.asarray(q, dtype=float))
     a0, a1 = _segments(arm, qa, la)  # (N, Sa, 3)
     b0, b1 = _segments(other, np.asarray(q_other, dtype=float)[None, :], lb)  # (1, Sb, 3)
+    out: BoolArray = capsules_touch(
+        np.ascontiguousarray(a0),
+        np.ascontiguousarray(a1),
+        np.ascontiguousarray(ra),
+        np.ascontiguousarray(b0[0]),
+        np.ascontiguousarray(b1[0]),
+        np.ascontiguousarray(rb),
+        float(padding),
+    )
+    return out
+
+
+def _arm_contacts_numpy(
+    arm: Arm, q: FloatArray, other: Arm, q_other: FloatArray, padding: float = 0.0
+) -> BoolArray:
+    """Vectorised numpy version of :func:`arm_contacts` (the tests' reference)."""
+    la, ra = _shape_capsules(arm.shapes)
+    lb, rb = _shape_capsules(other.shapes)
+    qa = np.atleast_2d(np.asarray(q, dtype=float))
+    a0, a1 = _segments(arm, qa, la)
+    b0, b1 = _segments(other, np.asarray(q_other, dtype=float)[None, :], lb)
     dist = _segment_distances(
         a0[:, :, None, :], a1[:, :, None, :], b0[:, None, :, :], b1[:, None, :, :]
     )  # (N, Sa, Sb)
