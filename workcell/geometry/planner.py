@@ -72,7 +72,8 @@ import numpy as np
 from multiarm.errors import InternalError, ValidationError
 from multiarm.types import FloatArray, Transform
 from workcell.arms.base import Arm, LinkShape
-from workcell.geometry.sweep import JointTrajectoryLike, sample_trajectory
+from workcell.geometry._sweep_jit import capsules_touch
+from workcell.geometry.sweep import JointTrajectoryLike, _shape_capsules, sample_trajectory
 from workcell.geometry.world import CollisionWorld
 
 __all__ = [
@@ -258,6 +259,11 @@ class DetourPlanner:
     _hi: FloatArray = field(init=False, repr=False)
     _lo_list: list[float] = field(init=False, repr=False)
     _hi_list: list[float] = field(init=False, repr=False)
+    _local: FloatArray = field(init=False, repr=False)
+    _rad: FloatArray = field(init=False, repr=False)
+    _ob0: FloatArray = field(init=False, repr=False)
+    _ob1: FloatArray = field(init=False, repr=False)
+    _orad: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.resolution) and self.resolution > 0):
@@ -277,6 +283,19 @@ class DetourPlanner:
         self._lo, self._hi = lim[:, 0], lim[:, 1]
         self._lo_list = (self._lo - 1e-9).tolist()
         self._hi_list = (self._hi + 1e-9).tolist()
+        # Bounding capsules (as in the zone sweep): a pose whose capsules keep
+        # clear of every obstacle capsule is free without asking FCL.
+        self._local, rad = _shape_capsules(self.arm.shapes)
+        self._rad = rad + self.clearance
+        shapes = [sh for sh, _ in self.obstacles.items]
+        if shapes:
+            ends, self._orad = _shape_capsules(shapes)
+            tfs = np.stack([tf for _, tf in self.obstacles.items])
+            self._ob0 = np.matmul(tfs[:, :3, :3], ends[:, 0, :, None])[..., 0] + tfs[:, :3, 3]
+            self._ob1 = np.matmul(tfs[:, :3, :3], ends[:, 1, :, None])[..., 0] + tfs[:, :3, 3]
+        else:
+            self._ob0 = self._ob1 = np.zeros((0, 3))
+            self._orad = np.zeros(0)
 
     # ----------------------------------------------------------- checks
     def first_invalid(self, qs: FloatArray) -> int:
@@ -299,8 +318,22 @@ class DetourPlanner:
         return stop if stop < len(qs) else -1
 
     def _first_hit(self, qs: FloatArray) -> int:
-        """First colliding configuration of (N, dof) ``qs`` (limits not checked), or -1."""
-        hit = self._world.first_collision("arm", self.arm.shape_transforms(qs), "obstacles")
+        """First colliding configuration of (N, dof) ``qs`` (limits not checked), or -1.
+
+        A compiled bounding-capsule test clears most poses; FCL decides the
+        rest exactly, in order.
+        """
+        tfs = self.arm.shape_transforms(qs)
+        rot, trans = tfs[..., :3, :3], tfs[..., :3, 3]
+        p0 = np.matmul(rot, self._local[:, 0, :, None])[..., 0] + trans
+        p1 = np.matmul(rot, self._local[:, 1, :, None])[..., 0] + trans
+        near = capsules_touch(p0, p1, self._rad, self._ob0, self._ob1, self._orad, 0.0)
+        idx = np.flatnonzero(near)
+        hit = (
+            self._world.first_collision("arm", tfs, "obstacles", order=idx.tolist())
+            if idx.size
+            else -1
+        )
         self.n_checks += (hit + 1) if hit >= 0 else len(qs)
         return hit
 
