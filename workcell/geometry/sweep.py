@@ -368,7 +368,25 @@ def _planes(prim: Primitive) -> tuple[FloatArray, FloatArray]:
     return n[first], b[first]
 
 
+_SOLIDS: dict[int, tuple[ZoneMap, _Solids]] = {}
+"""Zone solids by ``id`` of their (immutable) zone map; the map is kept so the id stays its."""
+
+_SOLIDS_SIZE = 16
+
+
 def _solids(zone_map: ZoneMap) -> _Solids:
+    """The zone map's solids in arrays, built once per zone map."""
+    hit = _SOLIDS.get(id(zone_map))
+    if hit is not None and hit[0] is zone_map:
+        return hit[1]
+    out = _build_solids(zone_map)
+    if len(_SOLIDS) >= _SOLIDS_SIZE:
+        _SOLIDS.pop(next(iter(_SOLIDS)))
+    _SOLIDS[id(zone_map)] = (zone_map, out)
+    return out
+
+
+def _build_solids(zone_map: ZoneMap) -> _Solids:
     sph: list[tuple[FloatArray, float, int]] = []
     box: list[tuple[FloatArray, FloatArray, FloatArray, int]] = []
     cyl: list[tuple[FloatArray, FloatArray, float, float, int]] = []
