@@ -14,7 +14,8 @@ do the task and, if so, builds the **mode**:
    gantry axes, servo profiles otherwise; per-axis or synchronised as the
    program says, S1.9) plus the step dwells: the mode's duration, nominal or
    worst case (:attr:`Cell.plan_with`); with ``park="home"`` (the default)
-   the task ends with the arm's move back to its start joints;
+   the mode is the round trip from the arm's start joints to the task and
+   back, so every motion is swept and travel setups are zero;
 4. the arm's collision shapes are swept along the timed path through the
    zones (:func:`workcell.geometry.zone_windows`, conservative by the cell's
    padding): each zone touched gives an ``occupy`` window and, in a shared
@@ -185,10 +186,15 @@ def _line(a: FloatArray, b: FloatArray) -> list[FloatArray]:
 
 
 def _mode(
-    program: Program, arm: DriveArm, q0: JointVector, park: JointVector | None = None
+    program: Program,
+    arm: DriveArm,
+    q0: JointVector,
+    park: JointVector | None = None,
+    approach_from: JointVector | None = None,
 ) -> tuple[JointTrajectory, list[float], JointVector]:
     """Time ``program`` on ``arm`` from joint vector ``q0`` (then back to
-    ``park`` if given).
+    ``park`` if given); with ``approach_from``, the trajectory starts there
+    with a joint move to ``q0``.
 
     Returns the trajectory, each program segment's start offset, and the end
     joints. Raises Unreachable (naming the step) when a pose cannot be reached.
@@ -198,6 +204,13 @@ def _mode(
     q = np.asarray(q0, dtype=float)
     pose = arm.fk(q[None])[0]
     t = 0.0
+    if approach_from is not None:
+        come = move_segment(
+            arm.drives, np.asarray(approach_from, dtype=float), q, arm.interpolation
+        )
+        if come is not None:
+            segments.append(come)
+            t += come.duration
     for seg in program.segments:
         offsets.append(t)
         if seg.kind == "dwell":
@@ -412,11 +425,16 @@ def _compile_mode(
     shared: Any,
     active: Any,
 ) -> CompiledMode:
-    # The task starts at its first pose: the travel there is the setup.
+    # With park="last" the task starts at its first pose and the travel there
+    # is the setup. With park="home" the task is the whole round trip from
+    # the arm's start joints and back, so every motion is swept for zones
+    # (the setups between tasks are then zero).
     first = next((s.target for s in program.segments if s.target is not None), None)
     q_first = arm.ik(first, q0) if first is not None else np.asarray(q0, dtype=float)
     home = np.asarray(q0, dtype=float) if cell.park == "home" else None
-    traj, offsets, q_end = _mode(program, arm, q_first, home)
+    traj, offsets, q_end = _mode(program, arm, q_first, home, approach_from=home)
+    if home is not None:
+        q_first = home
     zw = zone_windows(arm, traj, cell.zone_map, padding=cell.padding)
     windows: list[Window] = []
     dur = traj.duration
