@@ -12,18 +12,19 @@ virtual time advances at ``factor`` times wall time (``factor=1`` is real
 time, ``2`` twice as fast); the clock and the sleep are injectable so the
 pacing is testable without real time.
 
-Why an own kernel rather than SimPy. SimPy (4.1.2) has the same design (a
-heap with a tie-break counter, generator processes, a real-time variant), but
-every timeout there is an Event object with a callback list, and every
-process step goes through ``Process._resume``. The simulated networks of this
-package schedule millions of plain callbacks (frame ends, collisions,
-backoff timers), for which an event object per callback is pure overhead.
-``python -m benchmarks.bench_simkernel`` measures both side by side in one
-run on the same workloads; on the development machine (2 cores, Python 3.11)
-it gave about 1.2-1.5 M plain callbacks/s for this kernel against about
-0.45 M timeouts/s for SimPy (2.7-3x), and for N generator processes timing
-out repeatedly about 0.55 M process steps/s against 0.36 M for SimPy
-(about 1.5x). See ``benchmarks/results/simkernel.md`` for the latest numbers.
+Why an own kernel rather than SimPy. Not speed: SimPy (4.1.2) has the same
+design (a heap with a tie-break counter, generator processes, a real-time
+variant), and ``python -m benchmarks.bench_simkernel`` measures both side by
+side on the same seeded workloads (timer chains of plain callbacks, and
+generator processes): they run at about the same rate, within the noise of
+a shared machine (see ``benchmarks/results/simkernel.md`` for the latest
+ratios). What the own kernel gives is what the network media need and SimPy
+lacks or makes indirect: plain callbacks with arguments, a :class:`Handle`
+that *cancels* a scheduled callback (a collision cuts a transmission short;
+in SimPy a timeout cannot be withdrawn, only ignored when it fires), a
+priority per callback, a wall clock and sleep that can be injected so that
+real-time pacing is tested without real time, and no dependency for the
+simulation core (SimPy is only a development dependency, for the benchmark).
 
 Examples
 --------
@@ -54,50 +55,66 @@ from multiarm.errors import UsageError, ValidationError
 
 __all__ = ["Event", "Handle", "Kernel", "Process", "ProcessGenerator"]
 
+_INF = math.inf
+_heappush = heapq.heappush
+
 ProcessGenerator = Generator["float | Event", Any, Any]
 """What :meth:`Kernel.process` accepts: a generator yielding delays or events."""
 
 
-class Handle:
+class Handle(list[Any]):
     """A scheduled callback; :meth:`cancel` removes it before it runs.
+
+    A list ``[time, priority, seq, callback, args, cancelled]`` built in C
+    (no Python ``__init__`` per schedule); the heap holds ``(time, priority,
+    seq, handle)`` tuples, compared in C, ``seq`` unique.
 
     Parameters
     ----------
-    time : float
-        Virtual time at which the callback runs, seconds.
-    priority : int
-        Lower runs first among callbacks at the same time.
-    seq : int
-        Tie-break counter (the order of scheduling).
-    callback : callable
-        The function to call.
-    args : tuple
-        Its positional arguments.
+    entry : tuple
+        ``(time, priority, seq, callback, args, False)``: virtual time
+        (seconds), priority (lower runs first among callbacks at the same
+        time), tie-break counter (the order of scheduling), the function and
+        its positional arguments.
     """
 
-    __slots__ = ("args", "callback", "cancelled", "priority", "seq", "time")
+    __slots__ = ()
 
-    def __init__(
-        self,
-        time: float,
-        priority: int,
-        seq: int,
-        callback: Callable[..., object],
-        args: tuple[object, ...],
-    ) -> None:
-        self.time = time
-        self.priority = priority
-        self.seq = seq
-        self.callback = callback
-        self.args = args
-        self.cancelled = False
+    @property
+    def time(self) -> float:
+        """Virtual time at which the callback runs, seconds."""
+        return float(self[0])
+
+    @property
+    def priority(self) -> int:
+        """Priority among callbacks due at the same time (lower first)."""
+        return int(self[1])
+
+    @property
+    def seq(self) -> int:
+        """Tie-break counter: the order of scheduling."""
+        return int(self[2])
+
+    @property
+    def callback(self) -> Callable[..., object]:
+        """The function to call."""
+        cb: Callable[..., object] = self[3]
+        return cb
+
+    @property
+    def args(self) -> tuple[object, ...]:
+        """Its positional arguments."""
+        args: tuple[object, ...] = self[4]
+        return args
+
+    @property
+    def cancelled(self) -> bool:
+        """Whether :meth:`cancel` was called."""
+        return bool(self[5])
 
     def cancel(self) -> None:
         """Do not run the callback (no effect if it has already run)."""
-        self.cancelled = True
-
-    def __lt__(self, other: Handle) -> bool:
-        return (self.time, self.priority, self.seq) < (other.time, other.priority, other.seq)
+        self[5] = True
 
     def __repr__(self) -> str:
         name = getattr(self.callback, "__name__", repr(self.callback))
@@ -195,9 +212,9 @@ class Process(Event):
     def __init__(self, kernel: Kernel, generator: ProcessGenerator) -> None:
         super().__init__(kernel)
         self.generator = generator
-        kernel.schedule(0.0, self._resume, None)
+        kernel.schedule(0.0, self._resume)
 
-    def _resume(self, sent: object) -> None:
+    def _resume(self, sent: object = None) -> None:
         if isinstance(sent, Event):
             sent = sent.value
         try:
@@ -205,10 +222,12 @@ class Process(Event):
         except StopIteration as stop:
             self.succeed(stop.value)
             return
-        if isinstance(target, Event):
+        if type(target) is float or isinstance(target, int):  # a delay: the common case
+            self.kernel.schedule(float(target), self._resume)
+        elif isinstance(target, Event):
             target.add_callback(self._resume)
-        elif isinstance(target, (int, float)):
-            self.kernel.schedule(float(target), self._resume, None)
+        elif isinstance(target, float):
+            self.kernel.schedule(float(target), self._resume)
         else:
             raise UsageError(
                 f"process {self.generator!r} yielded {target!r}; yield a delay (float) or an Event"
@@ -289,8 +308,9 @@ class Kernel:
         UsageError
             For a negative delay, a time in the past, or a non-finite time.
         """
-        t = float(at_or_delay) if absolute else self._now + at_or_delay
-        if not (t >= self._now) or t == math.inf:
+        now = self._now
+        t = float(at_or_delay) if absolute else now + at_or_delay
+        if not (now <= t < _INF):
             raise UsageError(
                 f"Kernel.schedule: {callback!r} at {at_or_delay!r} "
                 f"({'absolute' if absolute else 'delay'}) is in the past or not finite "
@@ -298,8 +318,8 @@ class Kernel:
             )
         seq = self._seq
         self._seq = seq + 1
-        h = Handle(t, priority, seq, callback, args)
-        heapq.heappush(self._heap, (t, priority, seq, h))
+        h = Handle((t, priority, seq, callback, args, False))
+        _heappush(self._heap, (t, priority, seq, h))
         return h
 
     def event(self) -> Event:
@@ -355,7 +375,7 @@ class Kernel:
             Seconds.
         """
         heap = self._heap
-        while heap and heap[0][3].cancelled:
+        while heap and heap[0][3][5]:
             heapq.heappop(heap)
         return heap[0][0] if heap else math.inf
 
@@ -392,7 +412,7 @@ class Kernel:
                 if t > limit:
                     break
                 pop(heap)
-                if h.cancelled:
+                if h[5]:
                     continue
                 if realtime is not None:
                     wait = wall0 + (t - virt0) / realtime - self._clock()
@@ -400,7 +420,11 @@ class Kernel:
                         self._sleep(wait)
                 self._now = t
                 n += 1
-                h.callback(*h.args)
+                args = h[4]
+                if args:
+                    h[3](*args)
+                else:
+                    h[3]()
         finally:
             self.events_run += n
         if until is not None:

@@ -92,7 +92,8 @@ def test_bound_validation() -> None:
 def test_batch_dcr_never_exceeds_bound(
     n: int, load: float, length: float, fast: bool, seed: int
 ) -> None:
-    kw: dict[str, Any] = dict(REDUCED) if fast else {}
+    # REDUCED's 3.2 us slot only suits short buses: take its rate and IFS
+    kw: dict[str, Any] = {"rate": REDUCED["rate"], "ifs": REDUCED["ifs"]} if fast else {}
     d = dcr_rounds(300, n_stations=n, load=load, bus_length=length, seed=seed, **kw)
     assert d.size > 0
     assert d.max() <= dcr_bound(n_stations=n, bus_length=length, **kw)

@@ -50,6 +50,22 @@ def test_cancel() -> None:
     assert trace == [2]
 
 
+def test_handle_fields() -> None:
+    k = Kernel()
+    h = k.schedule(1.5, print, "x", priority=3)
+    h2 = k.schedule(0.5, print)
+    assert (h.time, h.priority, h.seq, h.callback, h.args) == (1.5, 3, 0, print, ("x",))
+    assert h2.seq == 1 and h2.args == ()
+    states = [h.cancelled]
+    assert "t=1.5 prio=3 #0 print" in repr(h)
+    h.cancel()
+    h2.cancel()
+    states.append(h.cancelled)
+    assert states == [False, True] and repr(h).endswith("cancelled>")
+    k.run()
+    assert k.events_run == 0
+
+
 def test_until_stops_and_sets_clock() -> None:
     k = Kernel()
     trace: list[int] = []

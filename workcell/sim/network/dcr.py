@@ -75,8 +75,11 @@ __all__ = [
 PREAMBLE_BYTES = 8
 """Ethernet preamble + start-of-frame delimiter, bytes."""
 
-REDUCED: dict[str, Any] = {"rate": 20e6, "ifs": 3.2e-6}
-"""The paper's non-standard parameters: 20 Mb/s and IFS 3.2 us (S2.9)."""
+REDUCED: dict[str, Any] = {"rate": 20e6, "ifs": 3.2e-6, "slot_time": 3.2e-6}
+"""The paper's non-standard parameters (S2.9): 20 Mb/s, IFS 3.2 us and a
+slot of 3.2 us (64 bit times at 20 Mb/s), just above jam + 2 tau = 2.6 us on
+the 100 m bus. Accepted by :func:`dcr_bound`, :func:`dcr_rounds` and
+:class:`~workcell.sim.network.ethernet.EthernetParams`."""
 
 
 def _check_positive(**values: float) -> None:
@@ -97,6 +100,7 @@ def dcr_bound(
     propagation_speed: float = 2e8,
     count_preamble: bool = False,
     mixed: bool = True,
+    slot_time: float | None = None,
 ) -> float:
     """Worst-case CSMA/DCR access + transfer delay of one round (S2.9).
 
@@ -128,6 +132,11 @@ def dcr_bound(
         True: one trajectory + (N - 1) position reports (the paper's mixed
         form). False: N frames of ``trajectory_bytes`` (plain D_max with
         X = X_t).
+    slot_time : float, optional
+        Slot time, seconds. It does not enter D (in the worst case every
+        turn of the resolution carries a frame); when given it is checked to
+        exceed jam + 2 tau (:func:`min_slot_time`), the condition for every
+        collision to be detected within one slot.
 
     Returns
     -------
@@ -137,12 +146,16 @@ def dcr_bound(
     Raises
     ------
     ValidationError
-        For N < 1 or non-positive parameters.
+        For N < 1, non-positive parameters or a slot not above jam + 2 tau.
 
     Examples
     --------
     >>> round(dcr_bound(mixed=False) * 1e6, 1)
     1302.5
+    >>> dcr_bound(rate=20e6, slot_time=2e-6)
+    Traceback (most recent call last):
+    ...
+    multiarm.errors.ValidationError: dcr_bound: slot_time 2.0 us must exceed jam + 2 tau = 2.6 us
     """
     if n_stations < 1:
         raise ValidationError(f"dcr_bound: n_stations must be >= 1, got {n_stations}")
@@ -160,6 +173,13 @@ def dcr_bound(
         raise ValidationError(f"dcr_bound: epsilon must be >= 0, got {epsilon!r}")
     extra = PREAMBLE_BYTES if count_preamble else 0
     tau = bus_length / propagation_speed
+    if slot_time is not None:
+        need = jam_bits / rate + 2 * tau
+        if not (slot_time > need * (1 + 1e-9) and math.isfinite(slot_time)):
+            raise ValidationError(
+                f"dcr_bound: slot_time {slot_time * 1e6:.1f} us must exceed jam + 2 tau = "
+                f"{need * 1e6:.1f} us"
+            )
     gamma = 2 * tau + jam_bits / rate + eps
     xt = (trajectory_bytes + extra) * 8 / rate
     xp = (position_bytes + extra) * 8 / rate if mixed else xt
@@ -214,6 +234,8 @@ def dcr_rounds(
     position_bytes: int = 51,
     trajectory_points: tuple[int, int] = (1, 5),
     seed: Seed = None,
+    slot_time: float | None = None,
+    empty_slot: float = 0.0,
 ) -> FloatArray:
     """Batch simulation of CSMA/DCR contention rounds, vectorised.
 
@@ -243,6 +265,19 @@ def dcr_rounds(
         Range of trajectory points, inclusive (1..5).
     seed : int or Generator, optional
         Random source.
+    slot_time : float, optional
+        Accepted for symmetry with :data:`REDUCED`; checked as in
+        :func:`dcr_bound`, it does not change the delays.
+    empty_slot : float, optional
+        Seconds the turn of a station with nothing to send costs in a
+        resolution (default 0: the resolution skips silent stations, the
+        idealisation behind the paper's bound). A slotted resolution spends
+        at least a slot time of silence on each: with the standard 51.2 us
+        slot a silent turn outlasts a 51-byte one (50.9 us) by 0.3 us, which
+        the bound's IFS + tau of slack absorbs up to 33 silent stations (at
+        10 stations the worst round ends at 596.4 us, under 604.1); at 40
+        stations the coordinator and the last station alone would end
+        2132.4 us after the collision, 1.3 us past :func:`dcr_bound`.
 
     Returns
     -------
@@ -268,6 +303,14 @@ def dcr_rounds(
     lo, hi = trajectory_points
     if not 1 <= lo <= hi <= 5:
         raise ValidationError(f"dcr_rounds: trajectory_points {trajectory_points} not in 1..5")
+    if slot_time is not None:
+        dcr_bound(
+            bus_length=bus_length,
+            rate=rate,
+            jam_bits=jam_bits,
+            propagation_speed=propagation_speed,
+            slot_time=slot_time,
+        )
     rng = as_rng(seed)
     eps = jam_bits / rate if epsilon is None else epsilon
     tau = bus_length / propagation_speed
@@ -282,7 +325,9 @@ def dcr_rounds(
         if n_stations == 1:
             return (x[:, 0] + tau).astype(np.float64)
         return ends.ravel()
-    turn = np.where(active, turn, 0.0)
+    if not (empty_slot >= 0 and math.isfinite(empty_slot)):
+        raise ValidationError(f"dcr_rounds: empty_slot must be >= 0, got {empty_slot!r}")
+    turn = np.where(active, turn, empty_slot)
     m = active.sum(axis=1, keepdims=True)
     ends = np.cumsum(turn, axis=1) + gamma  # = gamma + IFS + sum(turns) - IFS
     alone = np.broadcast_to(x + tau, ends.shape)

@@ -4,7 +4,8 @@
   force, gripper and detector controllers (S1.5, S1.7, S1.8);
 * :mod:`.ccu` -- the CCU and its task-box language (S1.1, S1.9);
 * :mod:`.programs` -- a one/two-arm cell, the chess-piece demo (S1.8) and the
-  S1.10 bus-load programs.
+  S1.10 bus-load programs;
+* :mod:`.schedule` -- a cell's schedule run as a task program on the CCU.
 
 Examples
 --------
@@ -38,6 +39,7 @@ from workcell.sim.supersigma.programs import (
     chess_sort,
     run_program,
 )
+from workcell.sim.supersigma.schedule import Handover, ScheduleRun, run_schedule
 
 __all__ = [
     "ABORT_FORCE",
@@ -52,16 +54,19 @@ __all__ = [
     "DetectorController",
     "ForceController",
     "GripperController",
+    "Handover",
     "Microbus",
     "MotorController",
     "Piece",
     "RunReport",
+    "ScheduleRun",
     "SigmaCell",
     "StepProfile",
     "bus_load_table",
     "chess_sort",
     "move_time",
     "run_program",
+    "run_schedule",
     "status_lines_needed",
     "steps_args",
 ]

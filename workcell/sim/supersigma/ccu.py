@@ -16,10 +16,15 @@ statement           bus traffic
 ``wait(a)``         poll the status lines until ``a`` is free (no command)
 ``set_flag(f)``     none
 ``wait_flag(f)``    none (re-checked every ``poll_interval``)
+``wait_until(t)``   none (idle until time ``t``)
 ==================  =========================================================
 
-Every statement also costs ``statement_time`` of the CCU's processor (an
-interpreted, BASIC-like language); boxes share that processor. The CCU never
+Every statement but ``wait`` also costs ``statement_time`` of the CCU's
+processor (an interpreted, BASIC-like language); boxes share that processor.
+``wait`` only reads the status lines every ``poll_interval``: that time
+counts as idle, the controllers being busy with earlier commands (S1.10:
+the CCU idles at least half the time), and is reported by
+:attr:`RunReport.idle_share`. The CCU never
 sends to a busy controller (it checks the status lines first, S1.3) and
 waits for the bus (10,000 commands/s). An A line (rail limit or excessive
 force) reaches it as an interrupt; it records it, acknowledges the line and
@@ -300,9 +305,9 @@ class CCU:
         yield from self._cpu()
         self.flags[name] = value
 
-    def wait_flag(self, name: str, value: bool = True) -> ProcessGenerator:
-        """WAIT FLAG until ``flags[name] == value`` (then it is consumed: set
-        back to ``not value``).
+    def wait_flag(self, name: str, value: bool = True, consume: bool = True) -> ProcessGenerator:
+        """WAIT FLAG until ``flags[name] == value`` (then, by default, it is
+        consumed: set back to ``not value``).
 
         Parameters
         ----------
@@ -310,6 +315,10 @@ class CCU:
             Flag.
         value : bool, optional
             Value waited for.
+        consume : bool, optional
+            Reset the flag once seen (a hand-over between two boxes); False
+            leaves it for every other box waiting on it (an event that stays
+            true, such as "task done").
 
         Yields
         ------
@@ -319,7 +328,25 @@ class CCU:
         yield from self._cpu()
         while self.flags.get(name, False) != value:
             yield self.poll_interval
-        self.flags[name] = not value
+        if consume:
+            self.flags[name] = not value
+
+    def wait_until(self, t: float) -> ProcessGenerator:
+        """WAIT TIME: idle until the virtual time ``t`` (no bus traffic).
+
+        Parameters
+        ----------
+        t : float
+            Seconds.
+
+        Yields
+        ------
+        float
+            Delays.
+        """
+        yield from self._cpu()
+        if t > self.kernel.now:
+            yield t - self.kernel.now
 
     def note(self, key: str, value: object) -> None:
         """Record a result of the program (no bus traffic).

@@ -47,6 +47,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TypeVar
 
 from multiarm.errors import UsageError, ValidationError
 from workcell.sim.kernel import Kernel
@@ -74,6 +75,8 @@ __all__ = [
     "status_lines_needed",
     "steps_args",
 ]
+
+_C = TypeVar("_C", bound="Controller")
 
 FREE = (0, 0)
 BUSY = (0, 1)
@@ -602,7 +605,7 @@ class Microbus:
         self._interrupt_cbs: list[Callable[[Controller], object]] = []
 
     # -------------------------------------------------------- configuration --
-    def add(self, controller: Controller, segment: int = 0) -> Controller:
+    def add(self, controller: _C, segment: int = 0) -> _C:
         """Attach ``controller`` on bus ``segment``.
 
         Parameters

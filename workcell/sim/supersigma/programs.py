@@ -21,7 +21,8 @@ saturation (commands/s over 10,000) next to the paper's figures:
   well known, with raised force thresholds and repeated tries at slightly
   different positions (S1.7);
 * ``SCP2B`` -- two arms continuously moving over very short distances
-  (10-40 steps, 0.4-1.5 mm) for 160 moves each;
+  (60-400 steps, 2.25-15 mm, next to a travel of 500 mm) for 160 moves
+  each, alternating x and y;
 * ``PRCO`` -- two arms, a long program: arm 0 brings 16 parts to a buffer,
   arm 1 takes each one, measures its height with the detector and puts it in
   one of two bins; the arms are synchronised by flags.
@@ -90,12 +91,13 @@ class Piece:
 
 
 class SigmaCell:
-    """A one- or two-arm SUPERSIGMA cell on one MICROBUS.
+    """A SUPERSIGMA cell of one or more arms on one MICROBUS (the original
+    has two; up to 25 fit the 256 addresses, 10 per arm).
 
     Parameters
     ----------
     arms : int, optional
-        1 or 2.
+        1..25 (arm a uses addresses 10 a + 1 .. 10 a + 6, on segment a).
     pieces : sequence of Piece, optional
         Parts on the table (seen by the detectors).
     z_home : float, optional
@@ -120,8 +122,8 @@ class SigmaCell:
         statement_time: float = 1e-3,
         profile: StepProfile | None = None,
     ) -> None:
-        if arms not in (1, 2):
-            raise ValidationError(f"SigmaCell: arms must be 1 or 2, got {arms}")
+        if not 1 <= arms <= 25:
+            raise ValidationError(f"SigmaCell: arms must be 1..25, got {arms}")
         self.kernel = Kernel()
         self.bus = Microbus(self.kernel)
         self.profile = profile if profile is not None else StepProfile()
@@ -445,7 +447,8 @@ def _scp1b(seed: Seed) -> tuple[SigmaCell, dict[str, Box]]:
 
 def _scp2b() -> tuple[SigmaCell, dict[str, Box]]:
     cell = SigmaCell(2)
-    pattern = (15, 30, -15, -30, 10, 40, -10, -40)
+    # a few millimetres per move (2.25-15 mm), short next to the 500 mm travel
+    pattern = (60, 200, -60, -200, 120, 400, -120, -400)
 
     def arm_box(arm: int) -> Box:
         def box(ccu: CCU) -> ProcessGenerator:
