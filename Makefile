@@ -9,7 +9,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 PYTEST_ARGS ?=
 
-.PHONY: demo test lint lock bench clean
+.PHONY: demo test lint lock bench docs clean
 
 $(STAMP): pyproject.toml constraints.txt
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' \
@@ -32,6 +32,10 @@ test: lint
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks
+
+# The documentation site (mkdocs.yml) into site/, warnings as errors.
+docs: $(STAMP)
+	$(BIN)/mkdocs build --strict
 
 # Re-resolve every dependency and rewrite the lock (constraints.txt).
 lock:

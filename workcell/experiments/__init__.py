@@ -1,0 +1,45 @@
+"""Experiments at scale: declarative sweeps, results with provenance, analysis plots.
+
+* :func:`load_sweep` reads a sweep file (TOML: instances x solver
+  configurations x seeds x repetitions); :func:`run_sweep` runs it in a local
+  process pool or on a ``dask.distributed`` cluster, streaming results,
+  resuming where an interrupted sweep stopped, recording failures
+  (:mod:`workcell.experiments.sweep`).
+* :func:`read_results` reads the Parquet results (one row per run, with
+  provenance) into pandas (:mod:`workcell.experiments.results`).
+* :mod:`workcell.experiments.analysis`: performance profiles, gap over time,
+  time to target, scaling and box plots, and the benchmark tables (imported
+  on its own: it needs matplotlib).
+
+The command ``multiarm sweep FILE [--scheduler ADDRESS] [--workers N]`` runs a sweep file.
+"""
+
+from workcell.experiments.results import COLUMNS, read_results, write_results
+from workcell.experiments.sweep import (
+    InstanceSpec,
+    Run,
+    SolverConfig,
+    Sweep,
+    SweepOutcome,
+    build_problem,
+    load_sweep,
+    parse_sweep,
+    run_one,
+    run_sweep,
+)
+
+__all__ = [
+    "COLUMNS",
+    "InstanceSpec",
+    "Run",
+    "SolverConfig",
+    "Sweep",
+    "SweepOutcome",
+    "build_problem",
+    "load_sweep",
+    "parse_sweep",
+    "read_results",
+    "run_one",
+    "run_sweep",
+    "write_results",
+]
