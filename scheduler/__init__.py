@@ -13,7 +13,15 @@
 from scheduler.bounds import LowerBounds, lower_bound, lower_bounds
 from scheduler.fjsp import parse_fjsp, read_fjsp
 from scheduler.greedy import GreedyOptions
-from scheduler.io import load_problem, problem_from_dict, save_problem
+from scheduler.io import (
+    detect_format,
+    load_problem,
+    load_schedule,
+    problem_from_dict,
+    save_problem,
+    schedule_from_dict,
+)
+from scheduler.plan import Plan
 from scheduler.problem import BlockingOracle, Model, Problem, Window
 from scheduler.result import Progress, Result, SearchStats, SolveStatus
 from scheduler.schedule import Reservation, Schedule, ScheduleError, validate
@@ -32,6 +40,7 @@ __all__ = [
     "MatrixSetup",
     "Model",
     "NoSetup",
+    "Plan",
     "Problem",
     "Progress",
     "Reservation",
@@ -45,13 +54,16 @@ __all__ = [
     "TravelSetup",
     "TreeOptions",
     "Window",
+    "detect_format",
     "load_problem",
+    "load_schedule",
     "lower_bound",
     "lower_bounds",
     "parse_fjsp",
     "problem_from_dict",
     "read_fjsp",
     "save_problem",
+    "schedule_from_dict",
     "solve",
     "validate",
 ]

@@ -45,6 +45,8 @@ class GridBlocking:
     cost_s: float = 3.0
 
     def cost(self, mode: int, arm: int, pose_task: int) -> float:
+        """``cost_s`` when the parked arm stands within ``reach`` grid steps
+        (Manhattan) of the task's location, else 0 (see ``BlockingOracle.cost``)."""
         where = self.home_xy[arm] if pose_task < 0 else self.task_xy[pose_task]
         d = int(np.abs(self.task_xy[int(self.mode_task[mode])] - where).sum())
         return self.cost_s if d <= self.reach else 0.0

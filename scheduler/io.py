@@ -25,15 +25,26 @@ import math
 from collections.abc import Mapping
 from os import PathLike, fspath
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
+
+import numpy as np
 
 from multiarm.errors import FormatError, ValidationError
 from multiarm.text import read_source
 from scheduler.problem import BlockingOracle, Model, Problem, Window
+from scheduler.schedule import Schedule
 
-__all__ = ["load_problem", "problem_from_dict", "save_problem"]
+__all__ = [
+    "detect_format",
+    "load_problem",
+    "load_schedule",
+    "problem_from_dict",
+    "save_problem",
+    "schedule_from_dict",
+]
 
 FORMAT = "multiarm.problem/1"
+SCHEDULE_FORMAT = "multiarm.schedule/1"
 
 
 class _Reader:
@@ -238,11 +249,198 @@ def save_problem(problem: Problem, path: str | PathLike[str]) -> Path:
 def load_problem(path: str | PathLike[str], blocking: BlockingOracle | None = None) -> Problem:
     """Read a problem written by :func:`save_problem` (see the module docstring)."""
     name = fspath(path)
-    text = read_source(path, FormatError, "problem")
+    data = _read_json(path, "problem")
+    return problem_from_dict(data, filename=name, blocking=blocking)
+
+
+_SCHEDULE_TOP = {"format", "makespan", "tasks"}
+_SCHEDULE_ROW = {"task", "arm", "start", "end", "waits", "blocking"}
+
+
+def schedule_from_dict(data: Any, problem: Problem, *, filename: str | None = None) -> Schedule:
+    """A schedule from the JSON data of :meth:`Schedule.to_dict`, type-checked.
+
+    Parameters
+    ----------
+    data : Any
+        The parsed JSON.
+    problem : Problem
+        The problem the schedule is for (names are resolved in it).
+    filename : str or None
+        Named in errors.
+
+    Returns
+    -------
+    Schedule
+        Bound to ``problem``; not validated (use :func:`scheduler.validate`).
+
+    Raises
+    ------
+    FormatError
+        A field of the wrong type, an unknown task or arm, a task listed twice
+        or missing, a wait at an offset that is not a border: naming the
+        JSON path.
+
+    Examples
+    --------
+    >>> from scheduler.fjsp import parse_fjsp
+    >>> p = parse_fjsp("1 1\\n1 1 1 2\\n")
+    >>> schedule_from_dict({"tasks": [{"task": "J1.O1", "arm": "M2", "start": 0, "end": 2}]}, p)
+    Traceback (most recent call last):
+    ...
+    multiarm.errors.FormatError: <string>: tasks[0].arm: unknown arm 'M2'
+    """
+    r = _Reader(filename)
+    top = r.table(data, "", _SCHEDULE_TOP, {"tasks"})
+    if top.get("format", SCHEDULE_FORMAT) != SCHEDULE_FORMAT:
+        raise r.fail(
+            "format",
+            f"unsupported schedule format {_show(top.get('format'))} (expected "
+            f"{SCHEDULE_FORMAT!r})",
+        )
+    T = problem.n_tasks
+    task_ids = {n: i for i, n in enumerate(problem.task_names)}
+    arm_ids = {n: i for i, n in enumerate(problem.arm_names)}
+    mode = np.full(T, -1, dtype=np.int64)
+    start, end, blocking = np.zeros(T), np.zeros(T), np.zeros(T)
+    waits: list[Any] = [np.zeros(0)] * T
+    for i, row in enumerate(r.items(top["tasks"], "tasks")):
+        w = f"tasks[{i}]"
+        rt = r.table(row, w, _SCHEDULE_ROW, {"task", "arm", "start", "end"})
+        name = r.name(rt["task"], f"{w}.task")
+        if name not in task_ids:
+            raise r.fail(f"{w}.task", f"unknown task {name!r}")
+        t = task_ids[name]
+        if mode[t] >= 0:
+            raise r.fail(f"{w}.task", f"task {name!r} is listed twice")
+        arm = r.name(rt["arm"], f"{w}.arm")
+        if arm not in arm_ids:
+            raise r.fail(f"{w}.arm", f"unknown arm {arm!r}")
+        m = int(problem.mode_of[arm_ids[arm], t])
+        if m < 0:
+            raise r.fail(f"{w}.arm", f"arm {arm!r} cannot do task {name!r}")
+        mode[t] = m
+        start[t] = r.number(rt["start"], f"{w}.start")
+        end[t] = r.number(rt["end"], f"{w}.end")
+        blocking[t] = r.number(rt.get("blocking", 0.0), f"{w}.blocking")
+        borders = problem.shapes[m].borders
+        wt = np.zeros(len(borders))
+        for j, pair in enumerate(r.items(rt.get("waits", []), f"{w}.waits")):
+            items = r.items(pair, f"{w}.waits[{j}]")
+            if len(items) != 2:
+                raise r.fail(f"{w}.waits[{j}]", f"expected [border, wait], got {len(items)} values")
+            b = r.number(items[0], f"{w}.waits[{j}][0]")
+            x = r.number(items[1], f"{w}.waits[{j}][1]")
+            if b not in borders:
+                raise r.fail(
+                    f"{w}.waits[{j}][0]", f"{b:g} is not a border of the mode of task {name!r}"
+                )
+            wt[borders.index(b)] = x
+        waits[t] = wt
+    if T and (mode < 0).any():
+        missing = problem.task_names[int(np.argmax(mode < 0))]
+        raise r.fail("tasks", f"task {missing!r} is missing")
+    return Schedule(mode, start, end, tuple(waits), blocking).bind(problem)
+
+
+def load_schedule(path: str | PathLike[str], problem: Problem) -> Schedule:
+    """Read a schedule written by ``Plan.write`` / ``Schedule.to_dict`` (JSON).
+
+    Parameters
+    ----------
+    path : path-like
+    problem : Problem
+
+    Returns
+    -------
+    Schedule
+        Bound to ``problem``, not validated.
+
+    Raises
+    ------
+    FormatError
+        Unreadable, not JSON, or malformed (see :func:`schedule_from_dict`).
+    """
+    name = fspath(path)
+    data = _read_json(path, "schedule")
+    return schedule_from_dict(data, problem, filename=name)
+
+
+def _read_json(path: str | PathLike[str], what: str) -> Any:
+    name = fspath(path)
+    text = read_source(path, FormatError, what)
     try:
-        data = json.loads(text)
+        return json.loads(text)
     except json.JSONDecodeError as exc:
         raise FormatError(exc.msg, filename=name, line=exc.lineno, column=exc.colno) from None
     except RecursionError:
-        raise FormatError("problem file is nested too deeply", filename=name) from None
-    return problem_from_dict(data, filename=name, blocking=blocking)
+        raise FormatError(f"{what} file is nested too deeply", filename=name) from None
+
+
+FileKind = Literal["problem", "schedule", "fjsp"]
+
+
+def detect_format(path: str | PathLike[str]) -> FileKind | None:
+    """What a file holds, judged by its content (not its name).
+
+    A JSON object with ``"format": "multiarm.problem/1"`` (or with ``arms``
+    and ``tasks`` whose entries have ``modes``) is a problem; with
+    ``"format": "multiarm.schedule/1"`` (or ``tasks`` whose entries have
+    ``start``) a schedule; text whose first line holds two or three numbers
+    and whose next line holds only integers is an FJSPLIB instance.
+
+    Parameters
+    ----------
+    path : path-like
+
+    Returns
+    -------
+    {"problem", "schedule", "fjsp"} or None
+        None when it is none of these, or cannot be read.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "x.txt").write_text("2 2 1\\n1 1 1 3\\n1 1 2 4\\n")
+    >>> detect_format(d / "x.txt")
+    'fjsp'
+    >>> _ = (d / "y").write_text('{"arms": [{"name": "a"}], "tasks": []}')
+    >>> detect_format(d / "y")
+    'problem'
+    """
+    try:
+        with Path(path).open("rb") as fh:
+            text = fh.read(64 * 1024 * 1024).decode("utf-8")  # a problem is far smaller
+    except (OSError, UnicodeDecodeError):
+        return None
+    head = text.lstrip()
+    if head.startswith("{"):
+        try:
+            data = json.loads(text)
+        except (json.JSONDecodeError, RecursionError):
+            return None
+        if not isinstance(data, dict):
+            return None
+        fmt = data.get("format")
+        if fmt == FORMAT:
+            return "problem"
+        if fmt == SCHEDULE_FORMAT:
+            return "schedule"
+        tasks = data.get("tasks")
+        if fmt is None and isinstance(tasks, list):
+            rows = [t for t in tasks if isinstance(t, dict)]
+            if "arms" in data and all("modes" in t or "task" not in t for t in rows):
+                return "problem"
+            if rows and all("task" in t and "start" in t for t in rows):
+                return "schedule"
+        return None
+    lines = [ln.split() for ln in text.splitlines() if ln.strip()]
+    if len(lines) >= 2 and 2 <= len(lines[0]) <= 3:
+        try:
+            [float(x) for x in lines[0]]
+            [int(x) for x in lines[1]]
+        except ValueError:
+            return None
+        return "fjsp"
+    return None

@@ -33,8 +33,10 @@ from __future__ import annotations
 import heapq
 import math
 import time
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -46,6 +48,10 @@ from scheduler.schedule import Schedule, validate
 from scheduler.search import Evaluator, local_search, rank_upward
 
 __all__ = ["CellState", "reschedule"]
+
+_POST_COST: weakref.WeakKeyDictionary[Any, float] = weakref.WeakKeyDictionary()
+"""Per compiled instance: seconds the last calls spent building and validating
+the new schedule (the part of the time limit kept back from the search)."""
 
 TaskRef = int | str
 ArmRef = int | str
@@ -216,8 +222,10 @@ def reschedule(
     stats.record(time.perf_counter() - t0, sol.makespan)
     rng = np.random.default_rng(seed)
     # the limit covers the whole call: keep time to build and validate the
-    # schedule (measured ~3 ms at 200 tasks on this project's machines)
-    deadline = t0 + time_limit - (1e-3 + 2.5e-5 * p.n_tasks)
+    # schedule. The reserve is the larger of a static estimate and what that
+    # step took in the last calls on this problem (slower on a loaded machine)
+    reserve = max(2e-4 + 1e-5 * p.n_tasks, 1.25 * _POST_COST.get(inst, 0.0))
+    deadline = t0 + time_limit - reserve
     if remaining and time.perf_counter() < deadline:
         # within a few milliseconds the list local search does better than the
         # tabu search here (measured over 60 failure events at 8 x 200: mean
@@ -231,9 +239,14 @@ def reschedule(
             max_evaluations=max_evaluations,
             on_improve=lambda s: stats.record(time.perf_counter() - t0, s.makespan),
         )
+    tp = time.perf_counter()
     sched = ev.schedule(sol)
     stats.evaluations = ev.evaluations
     mk = validate(p, sched)
+    sched = sched.bind(p)
+    took = time.perf_counter() - tp
+    # a running estimate that follows a slowdown at once and a speed-up gently
+    _POST_COST[inst] = max(took, 0.8 * _POST_COST.get(inst, took) + 0.2 * took)
     return Result(
         SolveStatus.FEASIBLE if mk > lb + 1e-9 else SolveStatus.OPTIMAL,
         sched,

@@ -53,7 +53,7 @@ from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
-from multiarm.errors import CycleError, ValidationError
+from multiarm.errors import CycleError, MultiarmError, ValidationError
 from multiarm.graph import find_cycle
 from multiarm.types import BoolArray, FloatArray, IntArray
 from scheduler.setup import BoundSetup, NoSetup, Setup, setup_from_dict
@@ -90,7 +90,11 @@ class BlockingOracle(Protocol):
     lazily and cached by the solvers, so it may be expensive.
     """
 
-    def cost(self, mode: int, arm: int, pose_task: int) -> float: ...
+    def cost(self, mode: int, arm: int, pose_task: int) -> float:
+        """The detour (seconds) mode ``mode`` costs when arm ``arm`` is parked at
+        the end pose of task ``pose_task`` (-1: its initial pose): 0 when it is
+        not in the way, ``inf`` when no detour exists."""
+        ...
 
 
 @dataclass(frozen=True, eq=False)
@@ -191,26 +195,32 @@ class Problem:
     # ----------------------------------------------------------- sizes
     @property
     def n_arms(self) -> int:
+        """The number of arms."""
         return len(self.arm_names)
 
     @property
     def n_tasks(self) -> int:
+        """The number of tasks."""
         return len(self.task_names)
 
     @property
     def n_modes(self) -> int:
+        """The number of modes (task, arm) pairs."""
         return len(self.mode_task)
 
     @property
     def n_windows(self) -> int:
+        """The number of zone windows of all modes."""
         return len(self.win_mode)
 
     @property
     def n_zones(self) -> int:
+        """The number of zones."""
         return len(self.zone_names)
 
     @property
     def n_tools(self) -> int:
+        """The number of tools."""
         return len(self.tool_names)
 
     @cached_property
@@ -271,6 +281,37 @@ class Problem:
             f"{self.n_modes} modes, {self.n_zones} zones, {self.n_tools} tools)"
         )
 
+    # ---------------------------------------------------------- equality
+    def __eq__(self, other: object) -> bool:
+        """Equal data: names, every array, the setup (by its data) and the same
+        blocking oracle object. For round-trip checks (``save_problem`` then
+        ``load_problem`` gives an equal problem).
+
+        Examples
+        --------
+        >>> from scheduler.fjsp import parse_fjsp
+        >>> parse_fjsp("1 1\\n1 1 1 2\\n") == parse_fjsp("1 1\\n1 1 1 2\\n")
+        True
+        >>> parse_fjsp("1 1\\n1 1 1 2\\n") == parse_fjsp("1 1\\n1 1 1 3\\n")
+        False
+        """
+        if not isinstance(other, Problem):
+            return NotImplemented
+        if self is other:
+            return True
+        for f in _DATA_FIELDS:
+            a, b = getattr(self, f), getattr(other, f)
+            if isinstance(a, np.ndarray):
+                if a.dtype != b.dtype or not np.array_equal(a, b):
+                    return False
+            elif a != b:
+                return False
+        return self.blocking is other.blocking and _same_setup(self.setup, other.setup)
+
+    def __hash__(self) -> int:
+        # consistent with __eq__: equal problems have equal names and sizes
+        return hash((self.name, self.task_names, self.arm_names, self.n_modes, self.n_windows))
+
     # -------------------------------------------------------- plain data
     def to_dict(self) -> dict[str, Any]:
         """Plain data with names (JSON-ready). The blocking oracle is not
@@ -325,6 +366,43 @@ class Problem:
             "tasks": tasks,
             "setup": self.setup.to_dict(),
         }
+
+
+_DATA_FIELDS = (
+    "name",
+    "arm_names",
+    "arm_capabilities",
+    "arm_available",
+    "arm_start_zones",
+    "task_names",
+    "task_release",
+    "task_preds",
+    "task_group",
+    "mode_task",
+    "mode_arm",
+    "mode_duration",
+    "mode_tools",
+    "win_mode",
+    "win_zone",
+    "win_start",
+    "win_end",
+    "win_move",
+    "zone_names",
+    "zone_exclusive",
+    "tool_names",
+)
+
+
+def _same_setup(a: Setup, b: Setup) -> bool:
+    """Two setups with the same data (a setup that is code: the same object)."""
+    if a is b:
+        return True
+    if type(a) is not type(b):
+        return False
+    try:
+        return bool(a.to_dict() == b.to_dict())
+    except MultiarmError:  # code (FunctionSetup): only itself is equal
+        return False
 
 
 # ---------------------------------------------------------------- builder

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
+from multiarm.errors import UsageError
+from scheduler.plan import Plan
 from scheduler.schedule import Schedule
 
 __all__ = ["Progress", "Result", "SearchStats", "SolveStatus"]
@@ -128,6 +130,23 @@ class Result:
     stats: SearchStats
 
     @property
+    def plan(self) -> Plan | None:
+        """The schedule with its problem (None without a schedule).
+
+        Raises
+        ------
+        UsageError
+            The schedule is not bound to its problem (results of
+            :func:`scheduler.solve` and :func:`scheduler.online.reschedule`
+            always are).
+        """
+        if self.schedule is None:
+            return None
+        if self.schedule.bound_problem is None:
+            raise UsageError("this result's schedule is not bound to its problem")
+        return Plan(self.schedule.bound_problem, self.schedule)
+
+    @property
     def gap(self) -> float:
         """``(objective - bound) / objective`` (0 when optimal, inf without a schedule)."""
         if self.schedule is None or not math.isfinite(self.objective):
@@ -157,8 +176,6 @@ class Result:
         try:
             import pandas as pd
         except ImportError as exc:  # pragma: no cover - pandas is in the test extras
-            from multiarm.errors import UsageError
-
             raise UsageError("Result.to_dataframe needs pandas (pip install pandas)") from exc
         return pd.DataFrame(
             [

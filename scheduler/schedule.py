@@ -31,13 +31,20 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from multiarm.errors import ScheduleError, ValidationError
+from multiarm.errors import ScheduleError, UsageError, ValidationError
 from multiarm.types import FloatArray, IntArray
 
 if TYPE_CHECKING:
     from scheduler.problem import Problem
 
-__all__ = ["Reservation", "Schedule", "ScheduleError", "blocking_required", "validate"]
+__all__ = [
+    "ROW_COLUMNS",
+    "Reservation",
+    "Schedule",
+    "ScheduleError",
+    "blocking_required",
+    "validate",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,6 +81,7 @@ class Schedule:
     waits: tuple[FloatArray, ...]
     blocking: FloatArray
     _arm: IntArray | None = field(default=None, repr=False)
+    _problem: Problem | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         for name in ("mode", "start", "end", "blocking"):
@@ -124,7 +132,61 @@ class Schedule:
 
     @property
     def n_tasks(self) -> int:
+        """The number of tasks."""
         return len(self.mode)
+
+    @property
+    def bound_problem(self) -> Problem | None:
+        """The problem this schedule is bound to (see :meth:`bind`), or None.
+
+        Schedules returned by :func:`scheduler.solve` and
+        :func:`scheduler.online.reschedule` are bound to their problem, so
+        that :meth:`to_dataframe` and :meth:`reservations_frame` need no
+        argument.
+        """
+        return self._problem
+
+    def bind(self, problem: Problem) -> Schedule:
+        """This schedule bound to ``problem`` (a new record; equal to this one).
+
+        Parameters
+        ----------
+        problem : Problem
+            The problem the schedule is for.
+
+        Returns
+        -------
+        Schedule
+
+        Raises
+        ------
+        ValidationError
+            The schedule and the problem have different numbers of tasks.
+
+        Examples
+        --------
+        >>> from scheduler.fjsp import parse_fjsp
+        >>> p = parse_fjsp("1 1\\n2 1 1 2 1 1 3\\n")
+        >>> s = Schedule.from_starts(p, [0, 1], [0.0, 2.0]).bind(p)
+        >>> s.to_dataframe()[["task", "arm", "start", "end", "duration"]].values.tolist()
+        [['J1.O1', 'M1', 0.0, 2.0, 2.0], ['J1.O2', 'M1', 2.0, 5.0, 3.0]]
+        """
+        if self.n_tasks != problem.n_tasks:
+            raise ValidationError(
+                f"a schedule of {self.n_tasks} tasks cannot be bound to a problem of "
+                f"{problem.n_tasks} tasks"
+            )
+        return Schedule(self.mode, self.start, self.end, self.waits, self.blocking, None, problem)
+
+    def _the_problem(self, problem: Problem | None) -> Problem:
+        if problem is not None:
+            return problem
+        if self._problem is None:
+            raise UsageError(
+                "this schedule is not bound to a problem: pass the problem, or bind it "
+                "with schedule.bind(problem)"
+            )
+        return self._problem
 
     @property
     def makespan(self) -> float:
@@ -148,17 +210,29 @@ class Schedule:
         """Sum of every wait at zone borders (the conflicts predicted), seconds."""
         return float(sum(float(w.sum()) for w in self.waits))
 
-    def reservations(self, problem: Problem) -> list[Reservation]:
-        """Every use of an exclusive zone, shared-zone movement, tool and start zone."""
+    def reservations(
+        self, problem: Problem, seqs: list[list[int]] | None = None
+    ) -> list[Reservation]:
+        """Every use of an exclusive zone, shared-zone movement, tool and start zone.
+
+        Parameters
+        ----------
+        problem : Problem
+        seqs : list of list of int or None
+            :meth:`sequences`, when already computed.
+        """
         shapes = problem.shapes
         Z = problem.n_zones
         out: list[Reservation] = []
-        arms = self.arms(problem)
+        arms = self.arms(problem).tolist()
+        mode, start = self.mode.tolist(), self.start.tolist()
         for t in range(self.n_tasks):
-            sh = shapes[int(self.mode[t])]
+            sh = shapes[mode[t]]
+            if not (sh.exclusive or sh.moves or sh.tools):
+                continue
             arm = problem.arm_names[arms[t]]
             task = problem.task_names[t]
-            for r, s, e in sh.intervals(float(self.start[t]), self.waits[t]):
+            for r, s, e in sh.intervals(start[t], self.waits[t]):
                 kind: Literal["zone", "move"] = "zone" if r < Z else "move"
                 out.append(Reservation(kind, problem.zone_names[r % Z], task, arm, s, e))
             for r in sh.tools:
@@ -168,12 +242,14 @@ class Schedule:
                         problem.tool_names[r - 2 * Z],
                         task,
                         arm,
-                        float(self.start[t]),
+                        start[t],
                         float(self.end[t]),
                     )
                 )
+        if not any(problem.arm_start_zones):
+            return out
         for a, (z_list, dep) in enumerate(
-            zip(problem.arm_start_zones, self.departures(problem), strict=True)
+            zip(problem.arm_start_zones, self.departures(problem, seqs), strict=True)
         ):
             for z in z_list:
                 if problem.zone_exclusive[z]:
@@ -184,10 +260,17 @@ class Schedule:
                     )
         return out
 
-    def departures(self, problem: Problem) -> list[float]:
-        """When each arm leaves its initial pose (inf if it never moves)."""
+    def departures(self, problem: Problem, seqs: list[list[int]] | None = None) -> list[float]:
+        """When each arm leaves its initial pose (inf if it never moves).
+
+        Parameters
+        ----------
+        problem : Problem
+        seqs : list of list of int or None
+            :meth:`sequences`, when already computed.
+        """
         out = []
-        for a, seq in enumerate(self.sequences(problem)):
+        for a, seq in enumerate(self.sequences(problem) if seqs is None else seqs):
             if seq:
                 out.append(float(self.start[seq[0]]) - problem.setup_time(a, -1, seq[0]))
             else:
@@ -252,12 +335,95 @@ class Schedule:
             raise ValidationError(f"the schedule data lacks task {missing!r}")
         return cls(mode, start, end, tuple(waits), blocking)
 
-    def to_dataframe(self, problem: Problem) -> Any:
-        """A pandas DataFrame, one row per task (needs the ``analysis`` extra)."""
-        import pandas as pd
+    def rows(self, problem: Problem | None = None) -> list[dict[str, Any]]:
+        """One tidy record per task, in task order.
 
-        d = self.to_dict(problem)["tasks"]
-        return pd.DataFrame(d)
+        Parameters
+        ----------
+        problem : Problem or None
+            Needed only when the schedule is not bound to its problem.
+
+        Returns
+        -------
+        list of dict
+            Keys ``task``, ``arm`` (names), ``mode`` (mode id), ``start``,
+            ``end``, ``duration`` (the mode's, seconds), ``wait`` (total wait
+            at zone borders) and ``detour`` (blocking cost charged); ``end =
+            start + duration + wait + detour``.
+
+        Raises
+        ------
+        UsageError
+            No problem given and none bound.
+        """
+        p = self._the_problem(problem)
+        arms = self.arms(p)
+        return [
+            {
+                "task": p.task_names[t],
+                "arm": p.arm_names[int(arms[t])],
+                "mode": int(self.mode[t]),
+                "start": float(self.start[t]),
+                "end": float(self.end[t]),
+                "duration": float(p.mode_duration[int(self.mode[t])]),
+                "wait": float(self.waits[t].sum()),
+                "detour": float(self.blocking[t]),
+            }
+            for t in range(self.n_tasks)
+        ]
+
+    def to_dataframe(self, problem: Problem | None = None) -> Any:
+        """A pandas DataFrame of :meth:`rows` (one row per task).
+
+        Parameters
+        ----------
+        problem : Problem or None
+            Needed only when the schedule is not bound to its problem.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``task, arm, mode, start, end, duration, wait, detour``.
+
+        Raises
+        ------
+        UsageError
+            No problem given and none bound, or pandas missing.
+        """
+        pd = _pandas()
+        return pd.DataFrame(self.rows(problem), columns=list(ROW_COLUMNS))
+
+    def reservations_frame(self, problem: Problem | None = None) -> Any:
+        """A pandas DataFrame of :meth:`reservations`, in start order.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``kind`` (``zone``, ``move``, ``tool``, ``start``),
+            ``resource``, ``task`` (None for an arm standing in its start
+            zone), ``arm``, ``start``, ``end``.
+
+        Raises
+        ------
+        UsageError
+            No problem given and none bound, or pandas missing.
+        """
+        pd = _pandas()
+        res = sorted(self.reservations(self._the_problem(problem)), key=lambda r: (r.start, r.arm))
+        return pd.DataFrame(
+            [
+                {
+                    "kind": r.kind,
+                    "resource": r.resource,
+                    "task": r.task,
+                    "arm": r.arm,
+                    "start": r.start,
+                    "end": r.end,
+                }
+                for r in res
+            ],
+            columns=["kind", "resource", "task", "arm", "start", "end"],
+        )
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Schedule):
@@ -272,6 +438,18 @@ class Schedule:
         )
 
     __hash__ = None  # type: ignore[assignment]
+
+
+ROW_COLUMNS = ("task", "arm", "mode", "start", "end", "duration", "wait", "detour")
+"""The columns of :meth:`Schedule.rows` and :meth:`Schedule.to_dataframe`."""
+
+
+def _pandas() -> Any:
+    try:
+        import pandas as pd
+    except ImportError as exc:  # pragma: no cover - pandas is in the analysis extra
+        raise UsageError("data frames need pandas (pip install pandas)") from exc
+    return pd
 
 
 # --------------------------------------------------------------- validation
@@ -376,54 +554,57 @@ def validate(problem: Problem, schedule: Schedule, tol: float = 1e-6) -> float:
     ):
         raise ScheduleError(f"the schedule covers {len(s.mode)} tasks, the problem has {T}")
     names = p.task_names
+    # plain Python floats and ints: indexing numpy arrays one element at a time is slow
+    mode, start, end, blk = s.mode.tolist(), s.start.tolist(), s.end.tolist(), s.blocking.tolist()
+    mode_task, release, shapes = p.mode_task.tolist(), p.task_release.tolist(), p.shapes
     for t in range(T):
-        m = int(s.mode[t])
-        if not (0 <= m < p.n_modes) or int(p.mode_task[m]) != t:
+        m = mode[t]
+        if not (0 <= m < p.n_modes) or mode_task[m] != t:
             raise ScheduleError(
                 f"task {names[t]!r} is given mode {m}, which is not one of its modes"
             )
-        if not (math.isfinite(s.start[t]) and math.isfinite(s.end[t])):
+        if not (math.isfinite(start[t]) and math.isfinite(end[t])):
             raise ScheduleError(f"task {names[t]!r} has a non-finite start or end")
-        sh = p.shapes[m]
+        sh = shapes[m]
         w = s.waits[t]
         if len(w) != len(sh.borders):
             raise ScheduleError(
                 f"task {names[t]!r} gives {len(w)} waits for {len(sh.borders)} borders"
             )
-        if len(w) and (not np.all(np.isfinite(w)) or np.any(w < -tol)):
+        if len(w) and any(not math.isfinite(x) or x < -tol for x in w.tolist()):
             raise ScheduleError(f"task {names[t]!r} has a negative or non-finite wait")
-        if not (math.isfinite(s.blocking[t]) and s.blocking[t] >= -tol):
+        if not (math.isfinite(blk[t]) and blk[t] >= -tol):
             raise ScheduleError(f"task {names[t]!r} has a negative or non-finite blocking cost")
-        expect = float(s.start[t]) + sh.length(w) + float(s.blocking[t])
-        if abs(float(s.end[t]) - expect) > tol:
+        expect = start[t] + sh.length(w) + blk[t]
+        if abs(end[t] - expect) > tol:
             raise ScheduleError(
-                f"task {names[t]!r} ends at {_fmt(s.end[t])}, but start + duration + waits + blocking "
+                f"task {names[t]!r} ends at {_fmt(end[t])}, but start + duration + waits + blocking "
                 f"= {_fmt(expect)}"
             )
-        if s.start[t] < p.task_release[t] - tol:
+        if start[t] < release[t] - tol:
             raise ScheduleError(
-                f"task {names[t]!r} starts at {_fmt(s.start[t])} before its release {_fmt(p.task_release[t])}"
+                f"task {names[t]!r} starts at {_fmt(start[t])} before its release {_fmt(release[t])}"
             )
         for q in p.task_preds[t]:
-            if s.start[t] < s.end[q] - tol:
+            if start[t] < end[q] - tol:
                 raise ScheduleError(
-                    f"task {names[t]!r} starts at {_fmt(s.start[t])} before its predecessor "
-                    f"{names[q]!r} ends at {_fmt(s.end[q])}"
+                    f"task {names[t]!r} starts at {_fmt(start[t])} before its predecessor "
+                    f"{names[q]!r} ends at {_fmt(end[q])}"
                 )
     seqs = s.sequences(p)
     for a, seq in enumerate(seqs):
         prev, ready = -1, float(p.arm_available[a])
         for t in seq:
             need = ready + p.setup_time(a, prev, t)
-            if s.start[t] < need - tol:
+            if start[t] < need - tol:
                 what = "becomes available" if prev < 0 else f"finishes {names[prev]!r}"
                 raise ScheduleError(
-                    f"arm {p.arm_names[a]!r} starts task {names[t]!r} at {_fmt(s.start[t])}, but it "
+                    f"arm {p.arm_names[a]!r} starts task {names[t]!r} at {_fmt(start[t])}, but it "
                     f"{what} and travels until {_fmt(need)}"
                 )
-            prev, ready = t, float(s.end[t])
+            prev, ready = t, end[t]
     # zones and tools
-    res = s.reservations(p)
+    res = s.reservations(p, seqs)
     groups: dict[tuple[str, str], list[Reservation]] = {}
     for r in res:
         if r.kind == "move" or r.kind == "tool":

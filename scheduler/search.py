@@ -23,10 +23,11 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel import State, compiled, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
@@ -52,8 +53,11 @@ class Solution:
     makespan: float
     secondary: float = 0.0
     state: State | None = None
+    built: Schedule | None = field(default=None, repr=False, compare=False)
+    """Its schedule, once :meth:`Evaluator.schedule` has built it."""
 
     def key(self) -> tuple[float, float]:
+        """(makespan, secondary): smaller is better."""
         return (self.makespan, self.secondary)
 
 
@@ -184,12 +188,16 @@ class Evaluator:
         )
 
     def schedule(self, sol: Solution) -> Schedule:
-        """The schedule of a decoded solution."""
+        """The schedule of a decoded solution (built once, then kept on it)."""
+        if sol.built is not None:
+            return sol.built
         st = sol.state
         if st is None:
             ok, st = self.decode(sol.order, sol.modes)
-            assert ok
+            if not ok:
+                raise InternalError("a decoded solution no longer decodes")
         sched: Schedule = to_schedule(self.inst, st)
+        sol.built = sched
         return sched
 
 
@@ -236,9 +244,10 @@ def critical_path(
     if T == 0:
         return []
     shapes = p.shapes
-    arms = sched.arms(p)
+    arms = sched.arms(p).tolist()
     seqs = sched.sequences(p)
-    prev_on_arm = np.full(T, -1)
+    start, end, mode = sched.start.tolist(), sched.end.tolist(), sched.mode.tolist()
+    prev_on_arm = [-1] * T
     for seq in seqs:
         for i in range(1, len(seq)):
             prev_on_arm[seq[i]] = seq[i - 1]
@@ -246,21 +255,23 @@ def critical_path(
     ends: dict[int, dict[float, list[int]]] = {}
     starts_of: list[list[tuple[int, float]]] = [[] for _ in range(T)]
     for t in range(T):
-        sh = shapes[int(sched.mode[t])]
-        ivs = sh.intervals(float(sched.start[t]), sched.waits[t])
-        ivs += [(r, float(sched.start[t]), float(sched.end[t])) for r in sh.tools]
+        sh = shapes[mode[t]]
+        if not (sh.exclusive or sh.moves or sh.tools):
+            continue
+        ivs = sh.intervals(start[t], sched.waits[t])
+        ivs += [(r, start[t], end[t]) for r in sh.tools]
         for r, s, e in ivs:
             ends.setdefault(r, {}).setdefault(round(e, 6), []).append(t)
             starts_of[t].append((r, s))
 
     def reasons(t: int) -> list[tuple[str, int]]:
-        S = float(sched.start[t])
+        S = start[t]
         out: list[tuple[str, int]] = []
         for q in p.task_preds[t]:
-            if abs(float(sched.end[q]) - S) <= tol:
+            if abs(end[q] - S) <= tol:
                 out.append(("pred", q))
-        q = int(prev_on_arm[t])
-        if q >= 0 and abs(float(sched.end[q]) + p.setup_time(int(arms[t]), q, t) - S) <= tol:
+        q = prev_on_arm[t]
+        if q >= 0 and abs(end[q] + p.setup_time(arms[t], q, t) - S) <= tol:
             out.append(("arm", q))
         for r, s in starts_of[t]:
             for x in ends.get(r, {}).get(round(s, 6), []):

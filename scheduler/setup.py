@@ -151,6 +151,8 @@ class BoundSetup:
         return best
 
     def row(self, arm: int, prev: int) -> FloatArray:
+        """(T,) float: setup of ``arm`` from task ``prev`` (-1: initial pose) to
+        every task (inf where the arm cannot do it); cached."""
         if self.zero:
             return self._zeros
         key = (arm, prev)
@@ -165,6 +167,7 @@ class BoundSetup:
         return out
 
     def time(self, arm: int, prev: int, nxt: int) -> float:
+        """Setup of ``arm`` from task ``prev`` (-1: initial pose) to task ``nxt``, seconds."""
         if self.zero:
             return 0.0
         if self._time_fn is not None:
@@ -226,7 +229,14 @@ class Setup:
     """Base class of setup-time models."""
 
     def bind(self, problem: Problem) -> BoundSetup:
-        raise NotImplementedError
+        """The setup times of ``problem``, looked up and cached per row.
+
+        Raises
+        ------
+        UsageError
+            A subclass that does not say how (it must override this method).
+        """
+        raise UsageError(f"{type(self).__name__} does not implement Setup.bind")
 
     def kernel_data(self, problem: Problem) -> KernelSetup:
         """The setup times of ``problem`` for the placement kernel.
@@ -254,7 +264,14 @@ class Setup:
         return _table_setup(problem, block)
 
     def to_dict(self) -> dict[str, Any]:
-        raise NotImplementedError
+        """Plain data for :func:`setup_from_dict` (JSON-ready).
+
+        Raises
+        ------
+        UsageError
+            A setup that cannot be written as data.
+        """
+        raise UsageError(f"{type(self).__name__} cannot be written as data")
 
 
 class NoSetup(Setup):

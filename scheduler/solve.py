@@ -44,6 +44,7 @@ __all__ = [
     "CpSatOptions",
     "SolverName",
     "SolverSpec",
+    "bind_result",
     "solve",
     "solve_greedy",
 ]
@@ -66,6 +67,10 @@ class CpSatOptions:
         Schedule: start from it.
     log : bool
         CP-SAT's search log on stdout.
+    max_deterministic_time : float or None
+        A work limit in CP-SAT's deterministic time units (> 0): with
+        ``workers=1`` the result then depends on the seed only, whatever
+        the machine's load.
 
     Raises
     ------
@@ -76,12 +81,22 @@ class CpSatOptions:
     workers: int = 2
     hint: Any = True
     log: bool = False
+    max_deterministic_time: float | None = None
 
     def __post_init__(self) -> None:
         if isinstance(self.workers, bool) or not isinstance(self.workers, int) or self.workers < 1:
             raise UsageError(f"CpSatOptions.workers must be an int >= 1, got {self.workers!r}")
         if not isinstance(self.log, bool):
             raise UsageError(f"CpSatOptions.log must be a bool, got {self.log!r}")
+        dt = self.max_deterministic_time
+        if dt is not None and (
+            isinstance(dt, bool)
+            or not isinstance(dt, int | float)
+            or not (math.isfinite(dt) and dt > 0)
+        ):
+            raise UsageError(
+                f"CpSatOptions.max_deterministic_time must be finite and > 0, or None, got {dt!r}"
+            )
 
 
 def _run_tree(
@@ -104,7 +119,16 @@ def _run_cpsat(
     from scheduler.cpsat import solve_cpsat
 
     o = opt or CpSatOptions()
-    return solve_cpsat(p, tl, seed, waits=waits, workers=o.workers, hint=o.hint, log=o.log)
+    return solve_cpsat(
+        p,
+        tl,
+        seed,
+        waits=waits,
+        workers=o.workers,
+        hint=o.hint,
+        log=o.log,
+        max_deterministic_time=o.max_deterministic_time,
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -131,6 +155,26 @@ REGISTRY: dict[str, SolverSpec] = {
     "greedy": SolverSpec(GreedyOptions, _run_greedy),
     "cpsat": SolverSpec(CpSatOptions, _run_cpsat),
 }
+
+
+def bind_result(result: Result, problem: Problem) -> Result:
+    """``result`` with its schedule bound to ``problem`` (see :meth:`Schedule.bind`).
+
+    Parameters
+    ----------
+    result : Result
+    problem : Problem
+
+    Returns
+    -------
+    Result
+        The same result; its schedule (when there is one) carries its problem.
+    """
+    if result.schedule is None or result.schedule.bound_problem is problem:
+        return result
+    from dataclasses import replace
+
+    return replace(result, schedule=result.schedule.bind(problem))
 
 
 def _warm_up() -> None:
@@ -238,7 +282,7 @@ def solve(
     _result._LISTENER[0] = listener
     t0 = time.perf_counter()
     try:
-        return spec.run(problem, time_limit, seed, waits, options, extra)
+        return bind_result(spec.run(problem, time_limit, seed, waits, options, extra), problem)
     except KeyboardInterrupt:
         # solvers that keep a best schedule return it themselves; here nothing was kept
         stats = SearchStats(interrupted=True)

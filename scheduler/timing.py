@@ -30,8 +30,6 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from multiarm.types import FloatArray
 
 if TYPE_CHECKING:
@@ -89,6 +87,10 @@ class ModeShape:
         self, start: float, waits: FloatArray | None = None
     ) -> list[tuple[int, float, float]]:
         """Actual ``(resource, start, end)`` reservations of zones (tools excluded)."""
+        if waits is None or not self.borders or not any(waits.tolist()):  # no wait: as they are
+            return [(r, start + s, start + e) for r, s, e in self.exclusive] + [
+                (r, start + s, start + e) for r, s, e in self.moves
+            ]
         out: list[tuple[int, float, float]] = []
         for r, s, e in self.exclusive:
             out.append(
@@ -96,11 +98,8 @@ class ModeShape:
             )
         for r, s, e in self.moves:
             cuts = [b for b in self.borders if s < b < e]
-            if waits is not None:
-                wait_at = dict(zip(self.borders, waits, strict=True))
-                cuts = [b for b in cuts if wait_at[b] > 0]
-            else:
-                cuts = []
+            wait_at = dict(zip(self.borders, waits.tolist(), strict=True))
+            cuts = [b for b in cuts if wait_at[b] > 0]
             points = [s, *cuts, e]
             for p0, p1 in itertools.pairwise(points):
                 out.append(
@@ -114,7 +113,7 @@ class ModeShape:
 
     def length(self, waits: FloatArray | None) -> float:
         """Duration plus waits (blocking cost excluded)."""
-        return self.duration + (float(np.sum(waits)) if waits is not None and len(waits) else 0.0)
+        return self.duration + (sum(waits.tolist()) if waits is not None and len(waits) else 0.0)
 
 
 class Shapes:

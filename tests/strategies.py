@@ -390,3 +390,70 @@ SDL_TOKENS = [
     "\n",
 ]
 sdl_token_soup = st.lists(st.sampled_from(SDL_TOKENS), max_size=50).map(" ".join)
+
+
+# ------------------------------------------------------- scheduling problems
+
+from scheduler.problem import Model as _SchedModel  # noqa: E402
+from scheduler.problem import Problem as _SchedProblem  # noqa: E402
+from scheduler.problem import Window as _SchedWindow  # noqa: E402
+
+WINDOW_KINDS = ("occupy", "move")
+ZONE_POLICIES = ("exclusive", "shared")
+
+
+@st.composite
+def zone_windows(draw: st.DrawFn, duration: int, zones: tuple[str, ...]) -> list[_SchedWindow]:
+    """Zone windows of one mode of ``duration`` half-seconds: any kind in any zone,
+    several in one zone allowed (touching, overlapping or apart)."""
+    out = []
+    for _ in range(draw(st.integers(0, 3))):
+        s = draw(st.integers(0, duration - 1))
+        e = draw(st.integers(s + 1, duration))
+        out.append(
+            _SchedWindow(
+                draw(st.sampled_from(zones)), s / 2, e / 2, draw(st.sampled_from(WINDOW_KINDS))
+            )
+        )
+    return out
+
+
+@st.composite
+def zone_problems(
+    draw: st.DrawFn, max_arms: int = 3, max_tasks: int = 6, tools: bool = True
+) -> _SchedProblem:
+    """Small feasible scheduling problems exercising every window kind (occupy,
+    move) in every zone kind (exclusive, restricted-simultaneous ``shared``):
+    move windows in exclusive zones included, several windows of a mode in one
+    zone, tools, releases, precedence and arm availability. Times are multiples
+    of 0.5 s (exact in binary). No start zones, so a schedule always exists
+    (run every task one after the other)."""
+    m = _SchedModel("hyp")
+    n_arms = draw(st.integers(2, max_arms))
+    for a in range(n_arms):
+        m.add_arm(f"a{a}", available=draw(st.integers(0, 4)) / 2)
+    # at least one zone of each policy
+    extra = draw(st.lists(st.sampled_from(ZONE_POLICIES), max_size=2))
+    policies = ["exclusive", "shared", *extra]
+    zones = tuple(f"z{i}" for i in range(len(policies)))
+    for name, pol in zip(zones, policies, strict=True):
+        m.add_zone(name, pol)  # type: ignore[arg-type]
+    n_tools = draw(st.integers(0, 2)) if tools else 0
+    for k in range(n_tools):
+        m.add_tool(f"k{k}")
+    n_tasks = draw(st.integers(1, max_tasks))
+    for t in range(n_tasks):
+        preds = draw(st.lists(st.integers(0, t - 1), max_size=2, unique=True)) if t else []
+        m.add_task(f"t{t}", release=draw(st.integers(0, 6)) / 2, predecessors=preds)
+        arms = draw(st.lists(st.integers(0, n_arms - 1), min_size=1, max_size=2, unique=True))
+        for a in arms:
+            d = draw(st.integers(1, 10))
+            held = draw(st.lists(st.integers(0, n_tools - 1), max_size=1)) if n_tools else []
+            m.add_mode(
+                t,
+                a,
+                d / 2,
+                windows=draw(zone_windows(d, zones)),
+                tools=[f"k{k}" for k in held],
+            )
+    return m.build()

@@ -41,12 +41,13 @@ def to_schedule(inst: Instance, st: State) -> Schedule:
     T = p.n_tasks
     waits = []
     blocking = np.zeros(T)
+    modes, starts, ends = st.t_mode.tolist(), st.t_start.tolist(), st.t_end.tolist()
     for t in range(T):
-        m = int(st.t_mode[t])
-        sh = shapes[m]
-        w = st.t_waits[t, : len(sh.borders)].copy()
+        sh = shapes[modes[t]]
+        w = st.t_waits[t, : len(sh.borders)]
         waits.append(w)
-        blocking[t] = max(0.0, float(st.t_end[t]) - float(st.t_start[t]) - sh.length(w))
-        if blocking[t] <= 1e-12 * max(1.0, abs(float(st.t_end[t]))):
-            blocking[t] = 0.0
-    return Schedule(st.t_mode.copy(), st.t_start.copy(), st.t_end.copy(), tuple(waits), blocking)
+        b = max(0.0, ends[t] - starts[t] - sh.length(w))
+        if b > 1e-12 * max(1.0, abs(ends[t])):
+            blocking[t] = b
+    # Schedule copies the arrays (and every wait row) into read-only ones
+    return Schedule(st.t_mode, st.t_start, st.t_end, tuple(waits), blocking)

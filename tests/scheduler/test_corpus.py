@@ -269,7 +269,7 @@ def _set(data: dict[str, Any], path: str, value: Any) -> Any:
         node = node[int(k)] if isinstance(node, list) else node[k]
     last = keys[-1]
     if value is DELETE:
-        del node[last]
+        del node[int(last) if isinstance(node, list) else last]
     elif isinstance(node, list):
         node[int(last)] = value
     else:
@@ -354,3 +354,191 @@ def test_bad_command_lines_fail_before_solving(
     import re
 
     assert re.search(message, captured.err), captured.err
+
+
+# ------------------------------------------------------------ FJSP files
+
+# (file content, message regex after "f.fjs:"): every one a FormatError naming the
+# file, and the line and column of the culprit where there is one
+FJSP_CASES: list[tuple[str, str]] = [
+    ("", r"^ empty FJSP file$"),
+    ("\n  \n\t\n", r"^ empty FJSP file$"),
+    ("2\n", r"^1: the header needs the number of jobs and of machines$"),
+    ("a 2\n1 1 1 3\n", r"^1:1: 'a' is not an integer$"),
+    ("1 b\n1 1 1 3\n", r"^1:3: 'b' is not an integer$"),
+    ("1.0 2\n1 1 1 3\n", r"^1:1: '1\.0' is not an integer$"),
+    ("0 2\n", r"^1:1: the header says 0 jobs \(needs >= 1\)$"),
+    ("-1 2\n1 1 1 3\n", r"^1:1: the header says -1 jobs \(needs >= 1\)$"),
+    ("1 0\n1 1 1 3\n", r"^1:3: the header says 0 machines \(needs 1\.\.10000\)$"),
+    ("1 99999999\n1 1 1 3\n", r"^1:3: the header says 99999999 machines"),
+    ("1 " + "9" * 40 + "\n1 1 1 3\n", r"^1:3: 9{20}\.\.\. is far too large$"),
+    ("2 2\n1 1 1 3\n", r"^1:1: the header announces 2 jobs but the file has 1 job lines$"),
+    ("1 2\n1 1 1 3\n1 1 1 3\n", r"^1:1: the header announces 1 jobs but the file has 2 job lines$"),
+    ("1 2\n0\n", r"^2:1: job 1 has 0 operations \(needs >= 1\)$"),
+    ("1 2\n-2 1 1 3\n", r"^2:1: job 1 has -2 operations \(needs >= 1\)$"),
+    ("1 2\n2 1 1 3\n", r"^2: job 1 ends before operation 2 of 2$"),
+    ("1 2\n1 0\n", r"^2:3: job 1 operation 1: 0 machines \(needs 1\.\.2\)$"),
+    ("1 2\n1 -1 1 3\n", r"^2:3: job 1 operation 1: -1 machines \(needs 1\.\.2\)$"),
+    ("1 2\n1 3 1 3 2 3 1 1\n", r"^2:3: job 1 operation 1: 3 machines \(needs 1\.\.2\)$"),
+    ("1 2\n1 2 1 3\n", r"^2:3: job 1 operation 1: 2 machine/time pairs announced, 1 given$"),
+    ("1 2\n1 1 1\n", r"^2:3: job 1 operation 1: 1 machine/time pairs announced, 0 given$"),
+    ("1 2\n1 1 3 5\n", r"^2:5: job 1 operation 1: machine 3 outside 1\.\.2$"),
+    ("1 2\n1 1 0 5\n", r"^2:5: job 1 operation 1: machine 0 outside 1\.\.2$"),
+    ("1 2\n1 1 -1 5\n", r"^2:5: job 1 operation 1: machine -1 outside 1\.\.2$"),
+    ("1 2\n1 2 1 5 1 4\n", r"^2:9: job 1 operation 1: machine 1 listed twice$"),
+    ("1 2\n1 1 1 0\n", r"^2:7: job 1 operation 1: time 0 must be > 0$"),
+    ("1 2\n1 1 1 -4\n", r"^2:7: job 1 operation 1: time -4 must be > 0$"),
+    ("1 2\n1 1 1 2000000000\n", r"^2:7: job 1 operation 1: time 2000000000 is beyond"),
+    ("1 2\n1 1 1 " + "1" * 400 + "\n", r"^2:7: 1{20}\.\.\. is far too large$"),
+    ("1 2\n1 1 1 2.5\n", r"^2:7: '2\.5' is not an integer$"),
+    ("1 2\n1 1 1 1e3\n", r"^2:7: '1e3' is not an integer$"),
+    ("1 2\n1 1 1 1_0\n", r"^2:7: '1_0' is not an integer$"),
+    ("1 2\n1 1 1 3 7\n", r"^2:9: job 1 has 1 values left over \(corrupt line\)$"),
+    ("1 2\n1 1 1 3 # note\n", r"^2:9: '#' is not an integer$"),
+    ("1 2\n1 1 1 NaN\n", r"^2:7: 'NaN' is not an integer$"),
+    ("2 2\n1 1 1 3\n1 1 2 x\n", r"^3:7: 'x' is not an integer$"),
+    ("2 2\n1 1 1 3\n\n1 1 2 0\n", r"^4:7: job 2 operation 1: time 0 must be > 0$"),
+    ("1 2\n2 1 1 3 1 0 2\n", r"^2:11: job 1 operation 2: machine 0 outside 1\.\.2$"),
+    ("1 2 3 4\n1 1 1 3 4\n", r"^2:9: job 1 has 1 values left over"),
+    ("1\t2\n1\t1\t1\t-3\n", r"^2:7: job 1 operation 1: time -3 must be > 0$"),
+    ("1 2\r\n1 1 9 3\r\n", r"^2:5: job 1 operation 1: machine 9 outside 1\.\.2$"),
+]
+
+
+@pytest.mark.parametrize(
+    ("content", "message"), FJSP_CASES, ids=[f"fjsp-{i}" for i in range(len(FJSP_CASES))]
+)
+def test_malformed_fjsp_files(tmp_path: Path, content: str, message: str) -> None:
+    import re
+
+    from scheduler import read_fjsp
+
+    f = tmp_path / "f.fjs"
+    f.write_bytes(content.encode("ascii"))
+    with pytest.raises(FormatError) as info:
+        read_fjsp(f)
+    text = str(info.value)
+    assert text.startswith(f"{f}:"), text
+    assert re.search(message, text[len(str(f)) + 1 :]), text
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"1 2\n1 1 1 3\xff\n", r"FJSP files are ASCII text"),
+        (b"\x89PNG\r\n\x1a\n\x00\x00", r"FJSP files are ASCII text"),
+        ("1 2\n1 1 1 \u0663\n".encode(), r"FJSP files are ASCII text"),
+        (b"1 2\n1 1 1 3\x00\n", r"'3\\x00' is not an integer"),
+    ],
+)
+def test_unreadable_fjsp_files(tmp_path: Path, content: bytes, message: str) -> None:
+    from scheduler import read_fjsp
+
+    f = tmp_path / "f.fjs"
+    f.write_bytes(content)
+    with pytest.raises(FormatError, match=message) as info:
+        read_fjsp(f)
+    assert str(info.value).startswith(str(f))
+
+
+def test_fjsp_paths_that_cannot_be_read(tmp_path: Path) -> None:
+    from scheduler import read_fjsp
+
+    with pytest.raises(FormatError, match="cannot read FJSP file") as info:
+        read_fjsp(tmp_path / "missing.fjs")
+    assert "missing.fjs" in str(info.value)
+    with pytest.raises(FormatError, match="cannot read FJSP file"):
+        read_fjsp(tmp_path)  # a directory
+
+
+def test_fjsp_text_that_is_not_a_string() -> None:
+    from scheduler import parse_fjsp
+
+    with pytest.raises(FormatError, match="FJSP text must be a str, got bytes"):
+        parse_fjsp(b"1 1\n1 1 1 1\n")  # type: ignore[arg-type]
+
+
+# ------------------------------------------------------------ schedule files
+
+SCHEDULE = {
+    "format": "multiarm.schedule/1",
+    "makespan": 7.0,
+    "tasks": [
+        {"task": "t1", "arm": "a", "start": 0.0, "end": 4.0, "waits": [], "blocking": 0.0},
+        {"task": "t2", "arm": "b", "start": 4.0, "end": 7.0},
+    ],
+}
+
+SCHEDULE_CASES: list[tuple[str, Any, str]] = [
+    ("", [], r"expected an object, got a list"),
+    ("format", "multiarm.schedule/7", r"format: unsupported schedule format"),
+    ("tasks", "t1", r"tasks: expected a list, got 't1'"),
+    ("tasks.0.task", "t9", r"tasks\[0\]\.task: unknown task 't9'"),
+    ("tasks.1.task", "t1", r"tasks\[1\]\.task: task 't1' is listed twice"),
+    ("tasks.0.arm", "b", r"tasks\[0\]\.arm: arm 'b' cannot do task 't1'"),
+    ("tasks.0.arm", 3, r"tasks\[0\]\.arm: expected a non-empty string, got 3"),
+    ("tasks.0.start", "0", r"tasks\[0\]\.start: expected a number, got '0'"),
+    ("tasks.0.end", None, r"tasks\[0\]\.end: expected a number, got None"),
+    ("tasks.0.waits", [[1.0]], r"tasks\[0\]\.waits\[0\]: expected \[border, wait\], got 1 values"),
+    ("tasks.0.waits", [[3.5, 1.0]], r"tasks\[0\]\.waits\[0\]\[0\]: 3\.5 is not a border"),
+    ("tasks.0.colour", "red", r"tasks\[0\]: unknown key 'colour'"),
+    ("tasks.1", DELETE, r"tasks: task 't2' is missing"),
+]
+
+
+@pytest.mark.parametrize(
+    ("path", "value", "message"),
+    SCHEDULE_CASES,
+    ids=[f"schedule-{i}" for i in range(len(SCHEDULE_CASES))],
+)
+def test_malformed_schedule_files(tmp_path: Path, path: str, value: Any, message: str) -> None:
+    import re
+
+    from scheduler import load_schedule
+
+    problem = load_problem(_write(tmp_path / "p.json", BASE))
+    data = _set(copy.deepcopy(SCHEDULE), path, value)
+    f = _write(tmp_path / "s.json", data)
+    with pytest.raises(FormatError) as info:
+        load_schedule(f, problem)
+    text = str(info.value)
+    assert text.startswith(f"{f}: "), text
+    assert re.search(message, text[len(str(f)) + 2 :]), text
+
+
+def test_the_base_schedule_is_valid(tmp_path: Path) -> None:
+    from scheduler import load_schedule, validate
+
+    problem = load_problem(_write(tmp_path / "p.json", BASE))
+    s = load_schedule(_write(tmp_path / "s.json", SCHEDULE), problem)
+    assert validate(problem, s) == 7.0 and s.bound_problem is problem
+
+
+def _write(path: Path, data: Any) -> Path:
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("content", "kind"),
+    [
+        (json.dumps(BASE), "problem"),
+        (json.dumps({k: v for k, v in BASE.items() if k != "format"}), "problem"),
+        (json.dumps(SCHEDULE), "schedule"),
+        (json.dumps({"tasks": SCHEDULE["tasks"]}), "schedule"),
+        ("2 2 1\n1 1 1 3\n1 1 2 4\n", "fjsp"),
+        ("2 2\r\n1 1 1 3\r\n1 1 2 4\r\n", "fjsp"),
+        ('{"name": "a task set", "tasks": [{"name": "t"}]}', None),
+        ("zone a { }\n", None),
+        ("[1, 2]", None),
+        ("{", None),
+        ("1 2\n", None),
+    ],
+)
+def test_files_are_recognised_by_content(tmp_path: Path, content: str, kind: str | None) -> None:
+    from scheduler import detect_format
+
+    f = tmp_path / "file.dat"
+    f.write_text(content)
+    assert detect_format(f) == kind
+    assert detect_format(tmp_path / "missing") is None

@@ -59,7 +59,7 @@ def test_failed_arm_gets_no_new_task_and_late_parts_wait() -> None:
         releases={p.task_names[late]: 60.0},
         arm_busy_until={(failed + 1) % p.n_arms: 30.0},
     )
-    r = reschedule(p, state, plan, time_limit=0.2)
+    r = reschedule(p, state, plan, time_limit=30.0, max_evaluations=100)
     s = r.schedule
     assert s is not None
     new_arms = s.arms(p)[rest]
@@ -73,10 +73,8 @@ def test_same_seed_same_plan() -> None:
     p, plan, done = plan_and_state(seed=4)
     state = CellState(time=10.0, done=done)
     # a work limit instead of a time limit makes the result depend on the seed only
-    from scheduler.online import reschedule as rs
-
-    a = rs(p, state, plan, time_limit=10.0, seed=1, max_evaluations=300)
-    b = rs(p, state, plan, time_limit=10.0, seed=1, max_evaluations=300)
+    a = reschedule(p, state, plan, time_limit=30.0, seed=1, max_evaluations=300)
+    b = reschedule(p, state, plan, time_limit=30.0, seed=1, max_evaluations=300)
     assert a.schedule == b.schedule
 
 
@@ -86,14 +84,18 @@ def test_a_release_override_never_advances_a_task() -> None:
     late = max(rest, key=lambda t: p.task_release[t])
     early = float(p.task_release[late]) - 5.0
     r = reschedule(
-        p, CellState(time=15.0, done=done, releases={late: early}), plan, time_limit=0.05
+        p,
+        CellState(time=15.0, done=done, releases={late: early}),
+        plan,
+        time_limit=30.0,
+        max_evaluations=100,
     )
     assert r.schedule is not None and r.schedule.start[late] >= p.task_release[late]
 
 
 def test_without_a_previous_plan() -> None:
     p, _plan, done = plan_and_state()
-    r = reschedule(p, CellState(time=15.0, done=done), None, time_limit=0.05)
+    r = reschedule(p, CellState(time=15.0, done=done), None, time_limit=30.0, max_evaluations=100)
     assert r.schedule is not None and validate(p, r.schedule) == r.objective
 
 

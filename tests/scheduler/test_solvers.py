@@ -12,14 +12,25 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from multiarm.errors import UsageError
-from scheduler import SOLVERS, MatrixSetup, Model, Problem, Window, lower_bound, solve, validate
+from scheduler import (
+    SOLVERS,
+    CpSatOptions,
+    MatrixSetup,
+    Model,
+    Problem,
+    Window,
+    lower_bound,
+    solve,
+    validate,
+)
 from scheduler.generate import random_problem
 from scheduler.tree import TreeOptions
 
 FAST = {
     "tree": dict(time_limit=None, options=TreeOptions(max_evaluations=300, max_width=4)),
     "greedy": dict(time_limit=None),
-    "cpsat": dict(time_limit=3.0, workers=1),
+    # a work limit, not a wall-clock one: repeatable on a loaded machine
+    "cpsat": dict(time_limit=None, options=CpSatOptions(workers=1, max_deterministic_time=0.5)),
 }
 
 
@@ -53,7 +64,7 @@ def test_every_schedule_validates(
     assert r.schedule is not None, r.summary()
     assert validate(p, r.schedule) == r.objective
     assert r.bound <= r.objective + 1e-9
-    assert r.bound >= lower_bound(p) - 1e-6 or r.status.value == "optimal"
+    assert r.bound >= lower_bound(p) - 1e-6  # never below the proven bound
     if not waits:
         assert r.schedule.total_wait() == 0.0
 
@@ -246,7 +257,7 @@ def test_time_limit_is_a_status_not_an_error() -> None:
     p = read_fjsp(path_of("mk10"))  # open for decades: no solver closes it in half a second
     r = solve(p, "tree", time_limit=0.5)
     # the limit ends in a status, not an exception (no timing claim: machines are shared)
-    assert r.status.value == "feasible" and r.schedule is not None and r.runtime < 30
+    assert r.status.value == "feasible" and r.schedule is not None
     assert r.stats.first_time <= r.stats.best_time <= r.runtime
 
 

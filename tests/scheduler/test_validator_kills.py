@@ -151,3 +151,174 @@ def test_an_arm_stays_parked_until_it_leaves_for_its_next_task_travel_included()
     validate(p, Schedule.from_starts(p, [0, 1], [0.5, 4.0], blocking=[2.0, 0.0]))
     with pytest.raises(ScheduleError, match="force 2"):
         validate(p, Schedule.from_starts(p, [0, 1], [0.5, 4.0], blocking=[0.0, 0.0]))
+    # from 1 on, b is travelling, no longer parked: a's task at 2 owes no detour
+    validate(p, Schedule.from_starts(p, [0, 1], [2.0, 4.0], blocking=[0.0, 0.0]))
+
+
+def _one_arm_chain(release: float = 0.0, travel: float = 0.0):  # type: ignore[no-untyped-def]
+    import numpy as np
+
+    from scheduler import MatrixSetup
+
+    m = Model()
+    m.add_arm("a")
+    m.add_task("t1")
+    m.add_task("t2", release=release, predecessors=["t1"])
+    m.add_mode("t1", "a", 4.0, windows=[Window("z", 1.0, 3.0)])
+    m.add_mode("t2", "a", 2.0)
+    m.add_zone("z")
+    if travel:
+        times = np.zeros((1, 3, 2))
+        times[0, 1, 1] = travel  # from t1's end pose to t2
+        m.set_setup(MatrixSetup(times))
+    return m.build()
+
+
+def test_releases_are_respected() -> None:
+    m = Model()
+    m.add_arm("a")
+    m.add_task("t", release=2.0)
+    m.add_mode("t", "a", 1.0)
+    p = m.build()
+    validate(p, Schedule.from_starts(p, [0], [2.0]))
+    with pytest.raises(ScheduleError, match="before its release 2"):
+        validate(p, Schedule.from_starts(p, [0], [1.9]))
+
+
+def test_precedence_is_respected_across_arms() -> None:
+    m = Model()
+    m.add_arm("a")
+    m.add_arm("b")
+    m.add_task("t1")
+    m.add_task("t2", predecessors=["t1"])
+    m.add_mode("t1", "a", 4.0)
+    m.add_mode("t2", "b", 1.0)
+    p = m.build()
+    validate(p, Schedule.from_starts(p, [0, 1], [0.0, 4.0]))
+    with pytest.raises(ScheduleError, match="before its predecessor 't1' ends at 4"):
+        validate(p, Schedule.from_starts(p, [0, 1], [0.0, 3.9]))
+
+
+def test_travel_between_tasks_of_one_arm_is_respected() -> None:
+    p = _one_arm_chain(travel=1.5)
+    validate(p, Schedule.from_starts(p, [0, 1], [0.0, 5.5]))
+    with pytest.raises(ScheduleError, match=r"travels until 5\.5"):
+        validate(p, Schedule.from_starts(p, [0, 1], [0.0, 5.0]))
+
+
+def test_ends_must_match_start_duration_and_waits() -> None:
+    import numpy as np
+
+    p = _one_arm_chain()
+    good = Schedule.from_starts(p, [0, 1], [0.0, 4.0])
+    validate(p, good)
+    short = Schedule(good.mode, good.start, np.array([4.0, 5.9]), good.waits, good.blocking)
+    with pytest.raises(ScheduleError, match=r"'t2' ends at 5\.9"):
+        validate(p, short)
+
+
+def test_negative_waits_are_refused() -> None:
+    p = _one_arm_chain()
+    validate(p, Schedule.from_starts(p, [0, 1], [0.0, 5.0], waits=[[1.0], []]))
+    with pytest.raises(ScheduleError, match="negative or non-finite wait"):
+        validate(p, Schedule.from_starts(p, [0, 1], [0.0, 3.0], waits=[[-1.0], []]))
+
+
+def test_a_mode_of_another_task_is_refused() -> None:
+    p = _one_arm_chain()
+    validate(p, Schedule.from_starts(p, [0, 1], [0.0, 4.0]))
+    bad = Schedule.from_starts(p, [1, 1], [0.0, 4.0])
+    with pytest.raises(ScheduleError, match="'t1' is given mode 1"):
+        validate(p, bad)
+
+
+def _start_zone_problem(travel: float = 0.0):  # type: ignore[no-untyped-def]
+    import numpy as np
+
+    from scheduler import MatrixSetup
+
+    m = Model()
+    m.add_zone("z")
+    m.add_arm("a")
+    m.add_arm("b", start_zones=["z"])  # b stands in z until it leaves for its task
+    m.add_task("ta")
+    m.add_task("tb")
+    m.add_mode("ta", "a", 2.0, windows=[Window("z", 0.0, 2.0)])
+    m.add_mode("tb", "b", 1.0)
+    if travel:
+        times = np.zeros((2, 3, 2))
+        times[1, 0, 1] = travel  # b: from its initial pose to tb
+        m.set_setup(MatrixSetup(times))
+    return m.build()
+
+
+def test_an_arm_stands_in_its_start_zone_until_it_leaves() -> None:
+    p = _start_zone_problem()
+    validate(p, Schedule.from_starts(p, [0, 1], [3.0, 3.0]))  # b leaves at 3, a enters at 3
+    with pytest.raises(ScheduleError, match=r"standing \(start zone\)"):
+        validate(p, Schedule.from_starts(p, [0, 1], [2.5, 3.0]))
+
+
+def test_an_arm_leaves_its_start_zone_when_its_travel_begins() -> None:
+    # b travels 2 s to tb at 5: it leaves z at 3, so a may enter at 3
+    p = _start_zone_problem(travel=2.0)
+    validate(p, Schedule.from_starts(p, [0, 1], [3.0, 5.0]))
+    with pytest.raises(ScheduleError, match=r"standing \(start zone\)"):
+        validate(p, Schedule.from_starts(p, [0, 1], [2.5, 5.0]))
+
+
+def test_a_parked_arm_with_no_detour_forbids_the_task() -> None:
+    import math
+
+    p = _blocked({(0, 1, -1): math.inf})
+    with pytest.raises(ScheduleError, match="in its way with no detour"):
+        validate(p, Schedule.from_starts(p, [0], [0.0], blocking=[5.0]))
+    q = _blocked({(0, 1, -1): 0.5})
+    validate(q, Schedule.from_starts(q, [0], [0.0], blocking=[0.5]))
+
+
+def test_shared_zone_occupants_that_do_not_move_may_overlap() -> None:
+    m = Model()
+    m.add_arm("a")
+    m.add_arm("b")
+    m.add_zone("z", "shared")
+    m.add_task("t1")
+    m.add_task("t2")
+    m.add_mode("t1", "a", 4.0, windows=[Window("z", 1.0, 3.0, "occupy")])
+    m.add_mode("t2", "b", 4.0, windows=[Window("z", 1.0, 3.0, "move")])
+    m.add_task("t3")
+    m.add_mode("t3", "a", 4.0, windows=[Window("z", 1.0, 3.0, "move")])
+    p = m.build()
+    validate(p, Schedule.from_starts(p, [0, 1, 2], [0.0, 0.5, 4.0]))  # occupy + move overlap
+    with pytest.raises(ScheduleError, match="moving in shared zone 'z'"):
+        validate(p, Schedule.from_starts(p, [0, 1, 2], [0.0, 2.5, 4.0]))  # t2 and t3 move
+
+
+def _wait_inside(policy: str, kind: str):  # type: ignore[no-untyped-def]
+    # a's mode: 4 s, a window in z over [1, 3) and a border at 2 (its window in y)
+    m = Model()
+    m.add_arm("a")
+    m.add_arm("b")
+    m.add_zone("z", policy)  # type: ignore[arg-type]
+    m.add_zone("y")
+    m.add_task("ta")
+    m.add_task("tb")
+    m.add_mode("ta", "a", 4.0, windows=[Window("z", 1.0, 3.0, kind), Window("y", 2.0, 3.0)])  # type: ignore[arg-type]
+    m.add_mode("tb", "b", 1.0, windows=[Window("z", 0.0, 1.0, kind)])  # type: ignore[arg-type]
+    return m.build()
+
+
+def test_waiting_inside_an_exclusive_zone_keeps_it() -> None:
+    # a waits 2 s at its border 2, inside z: it holds z over [1, 5)
+    p = _wait_inside("exclusive", "occupy")
+    validate(p, Schedule.from_starts(p, [0, 1], [0.0, 5.0], waits=[[0.0, 2.0], []]))
+    with pytest.raises(ScheduleError, match="exclusive zone 'z'"):
+        validate(p, Schedule.from_starts(p, [0, 1], [0.0, 4.5], waits=[[0.0, 2.0], []]))
+
+
+def test_a_waiting_arm_does_not_move() -> None:
+    # a moves in shared z over [1, 2) and [4, 5): b may move there in between
+    p = _wait_inside("shared", "move")
+    validate(p, Schedule.from_starts(p, [0, 1], [0.0, 2.5], waits=[[0.0, 2.0], []]))
+    with pytest.raises(ScheduleError, match="moving in shared zone 'z'"):
+        validate(p, Schedule.from_starts(p, [0, 1], [0.0, 4.5], waits=[[0.0, 2.0], []]))
