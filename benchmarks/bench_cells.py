@@ -10,7 +10,13 @@
    parked after each of its tasks; how they were settled (pre-test, no
    contact, detour, none) and the OMPL detour times (median, p95) and the
    share solved within 100 ms.
-3. Schedule quality on the compiled cells: greedy, tree and CP-SAT at the
+3. The detour planner's single-state validity check on ``scara4`` (arm 0
+   against arm 1 parked at home, uniform random joints, seed 0): the
+   compiled path (compiled forward kinematics, one compiled bounding-capsule
+   call, FCL only for candidates) next to the numpy reference path (numpy
+   forward kinematics and matmul shape poses, then the same capsule test and
+   FCL), in one run; both must give the same answers.
+4. Schedule quality on the compiled cells: greedy, tree and CP-SAT at the
    same time limit (seed 0), makespans checked by ``scheduler.validate``.
 """
 
@@ -27,6 +33,7 @@ import numpy as np
 from benchmarks.common import write
 from scheduler import lower_bound, solve, validate
 from workcell import compile_cell_detailed, load_example
+from workcell.oracle import CellOracle
 
 
 def _compile(names: list[str]) -> list[dict[str, Any]]:
@@ -58,7 +65,7 @@ def _detours(quick: bool) -> dict[str, Any]:
     cell = replace(load_example("scara4"), park="last")
     cc = compile_cell_detailed(cell)
     p, o = cc.problem, cc.problem.blocking
-    assert o is not None
+    assert isinstance(o, CellOracle)
     t0 = time.perf_counter()
     costs = []
     modes = range(0, p.n_modes, 4 if quick else 1)
@@ -86,6 +93,56 @@ def _detours(quick: bool) -> dict[str, Any]:
         if len(plans)
         else math.nan,
         "plans within 100 ms": f"{float(np.mean(plans <= 0.1)):.1%}" if len(plans) else "-",
+    }
+
+
+def _checks(n: int) -> dict[str, Any]:
+    from workcell.geometry._sweep_jit import capsules_touch
+    from workcell.geometry.planner import DetourPlanner, ObstacleSet
+
+    cell = load_example("scara4")
+    mover, blocker = cell.arms[0], cell.arms[1]
+    ctx = DetourPlanner(
+        mover, ObstacleSet.from_arm(blocker, blocker.home, 0.005), resolution=0.005, clearance=0.005
+    )
+    lo, hi = mover.joint_limits[:, 0], mover.joint_limits[:, 1]
+    qs = np.random.default_rng(0).uniform(lo, hi, (n, mover.dof))
+    idx = np.array([s.frame for s in mover.shapes])
+    off = np.stack([s.offset for s in mover.shapes])
+
+    def reference(q: np.ndarray) -> bool:
+        row = q.reshape(1, -1)
+        if not ctx._in_limits(row[0]):
+            return False
+        tfs = np.matmul(mover._frames_numpy(row)[:, idx], off)  # type: ignore[attr-defined]
+        rot, trans = tfs[..., :3, :3], tfs[..., :3, 3]
+        p0 = np.matmul(rot, ctx._local[:, 0, :, None])[..., 0] + trans
+        p1 = np.matmul(rot, ctx._local[:, 1, :, None])[..., 0] + trans
+        near = capsules_touch(p0, p1, ctx._rad, ctx._ob0, ctx._ob1, ctx._orad, 0.0)
+        if not near[0]:
+            return True
+        return bool(ctx._world.first_collision("arm", tfs, "obstacles") < 0)
+
+    for q in qs[:50]:  # warm up (numba's cache loads)
+        reference(q)
+        ctx.is_valid(q)
+    times = {}
+    answers = {}
+    for name, f in (("compiled", ctx.is_valid), ("numpy reference", reference)):
+        best = math.inf
+        for _ in range(3):
+            t0 = time.perf_counter()
+            got = [f(q) for q in qs]
+            best = min(best, time.perf_counter() - t0)
+        times[name] = 1e6 * best / n
+        answers[name] = got
+    assert answers["compiled"] == answers["numpy reference"], "the two checks disagree"
+    return {
+        "states": n,
+        "valid": f"{float(np.mean(answers['compiled'])):.1%}",
+        "compiled (us/check)": round(times["compiled"], 1),
+        "numpy reference (us/check)": round(times["numpy reference"], 1),
+        "speed-up": round(times["numpy reference"] / times["compiled"], 1),
     }
 
 
@@ -125,18 +182,25 @@ def main() -> None:
     limit = 1.0 if args.quick else 10.0
     comp = _compile(names)
     det = _detours(args.quick)
+    chk = _checks(500 if args.quick else 5000)
     qual = _quality(names, limit)
     md = (
         "# Built-in cells (`python -m benchmarks.bench_cells"
         + (" --quick" if args.quick else "")
-        + "`)\n\n## Compile\n\n"
+        + "`)\n\nMachine: 2 cores shared with other work while this ran; times are"
+        + " noisy (compare the ratios in one run, not absolute times across runs).\n"
+        + "\n## Compile\n\n"
         + _table(comp)
         + "\n## Detours on scara4, arms parked at their last poses\n\n"
         + _table([det])
+        + "\n## Single-state validity check on scara4 (best of 3 passes)\n\n"
+        + _table([chk])
         + f"\n## Schedules at {limit:g} s per solver (seed 0, validated)\n\n"
         + _table(qual)
     )
-    path = write("cells", {"seed": 0, "compile": comp, "detours": det, "quality": qual}, md)
+    path = write(
+        "cells", {"seed": 0, "compile": comp, "detours": det, "checks": chk, "quality": qual}, md
+    )
     print(md)
     print(f"written to {path}")
 

@@ -349,3 +349,49 @@ def test_arm_from_dict_builds_each_type() -> None:
 def test_arm_from_dict_errors_name_the_field(data, message) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ValidationError, match=message):
         arm_from_dict("a", data, "c.toml: arms.a")
+
+
+# ------------------------------------------------- compiled kinematics
+
+
+@pytest.mark.parametrize(
+    "arm",
+    (
+        *ARMS,
+        CartesianGantry(
+            "g3", rails={"x": (0.0, 1.0), "y": (0.0, 1.0), "z": (0.0, 0.4)}, wrist=False
+        ),
+    ),
+    ids=lambda a: f"{a.kind}-{a.dof}",
+)
+def test_compiled_frames_equal_the_numpy_frames(arm) -> None:  # type: ignore[no-untyped-def]
+    rng = np.random.default_rng(3)
+    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
+    q = rng.uniform(lo - 0.5, hi + 0.5, (300, arm.dof))  # off limits too: FK does not care
+    np.testing.assert_allclose(arm.frames(q), arm._frames_numpy(q), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(arm.frames(q[7]), arm._frames_numpy(q[7]), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("arm", ARMS, ids=lambda a: a.kind)
+def test_shape_transforms_equal_the_matmul_reference(arm) -> None:  # type: ignore[no-untyped-def]
+    rng = np.random.default_rng(4)
+    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
+    q = rng.uniform(lo, hi, (200, arm.dof))
+    fr = arm._frames_numpy(q)
+    idx = [s.frame for s in arm.shapes]
+    want = np.matmul(fr[:, idx], np.stack([s.offset for s in arm.shapes]))
+    np.testing.assert_allclose(arm.shape_transforms(q), want, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("arm", ARMS, ids=lambda a: a.kind)
+def test_compiled_sampling_equals_the_numpy_sampling(arm) -> None:  # type: ignore[no-untyped-def]
+    rng = np.random.default_rng(5)
+    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
+    w = rng.uniform(lo, hi, (5, arm.dof))
+    w[2] = w[1]  # a repeated waypoint
+    for interpolation in ("sync", "axis"):
+        traj = JointTrajectory.from_waypoints(arm.drives, w, interpolation)
+        t = np.concatenate(
+            [rng.uniform(-1.0, traj.duration + 1.0, 400), traj.knot_times, [0.0, traj.duration]]
+        )
+        np.testing.assert_allclose(traj.sample(t), traj._sample_numpy(t), rtol=0, atol=1e-12)

@@ -29,9 +29,33 @@ from typing import Literal
 
 import numpy as np
 
-from multiarm.types import BoolArray, FloatArray, JointVector, Transform
+from multiarm.types import BoolArray, FloatArray, IntArray, JointVector, Transform
+from workcell.arms._kinematics_jit import frame_products
 
 __all__ = ["Arm", "JointKind", "LinkShape", "ShapeKind"]
+
+_SHAPE_FRAMES: dict[int, tuple[tuple[LinkShape, ...], IntArray, FloatArray]] = {}
+"""Frame index (S,) and offsets (S, 4, 4) by ``id`` of an arm's shapes tuple
+(the tuple is kept so the id stays its)."""
+
+_SHAPE_FRAMES_SIZE = 64
+
+
+def shape_frames(arm: Arm) -> tuple[IntArray, FloatArray]:
+    """Frame index (S,) and centre offsets (S, 4, 4) of the arm's shapes, built once."""
+    shapes = arm.shapes
+    hit = _SHAPE_FRAMES.get(id(shapes))
+    if hit is not None and hit[0] is shapes:
+        return hit[1], hit[2]
+    idx = np.array([s.frame for s in shapes], dtype=np.int64)
+    off = np.ascontiguousarray(
+        np.stack([np.asarray(s.offset, dtype=float) for s in shapes]).reshape(-1, 4, 4)
+    )
+    if len(_SHAPE_FRAMES) >= _SHAPE_FRAMES_SIZE:
+        _SHAPE_FRAMES.pop(next(iter(_SHAPE_FRAMES)))
+    _SHAPE_FRAMES[id(shapes)] = (shapes, idx, off)
+    return idx, off
+
 
 ShapeKind = Literal["capsule", "box", "sphere", "cylinder"]
 """Collision primitive kinds (python-fcl's conventions)."""
@@ -171,10 +195,9 @@ class Arm(ABC):
 
     def shape_transforms(self, q: FloatArray) -> FloatArray:
         """(N, S, 4, 4) world pose of every shape's centre for ``q`` (N, dof)."""
-        fr = self.frames(np.atleast_2d(q))
-        idx = np.array([s.frame for s in self.shapes], dtype=np.int64)
-        off = np.stack([s.offset for s in self.shapes])
-        out: FloatArray = np.matmul(fr[:, idx], off)
+        fr = np.ascontiguousarray(self.frames(np.atleast_2d(q)), dtype=float)
+        idx, off = shape_frames(self)
+        out: FloatArray = frame_products(fr, idx, off)
         return out
 
     def within_limits(self, q: FloatArray, tol: float = 1e-9) -> BoolArray:

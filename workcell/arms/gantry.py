@@ -31,6 +31,7 @@ import numpy as np
 from multiarm.errors import Unreachable, ValidationError
 from multiarm.types import FloatArray, JointVector, Transform
 from workcell.arms._common import FLIP_X, DriveArm, rot_z, vertical_tool_yaw, wrap_near
+from workcell.arms._kinematics_jit import gantry_frames
 from workcell.arms.base import JointKind, LinkShape
 from workcell.arms.profiles import StepperDrive
 
@@ -149,6 +150,16 @@ class CartesianGantry(DriveArm):
             )
 
     def frames(self, q: FloatArray) -> FloatArray:
+        qq = np.ascontiguousarray(np.atleast_2d(np.asarray(q, dtype=float)))
+        if qq.shape[1] < 4:  # no wrist joint: a zero yaw column
+            qq = np.concatenate([qq, np.zeros((len(qq), 4 - qq.shape[1]))], axis=1)
+        out: FloatArray = gantry_frames(
+            np.ascontiguousarray(self.base, dtype=float), bool(self.wrist), qq
+        )
+        return out
+
+    def _frames_numpy(self, q: FloatArray) -> FloatArray:
+        """The numpy version of :meth:`frames` (the tests' reference)."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
         n = len(q)
         out = np.repeat(np.repeat(self.base[None, None], n, axis=0), 4, axis=1)

@@ -98,30 +98,65 @@ class Profile:
     jerk: FloatArray
     v0: float = 0.0
     peak: float = 0.0
-    _starts: FloatArray = field(init=False, repr=False)
-    _state: FloatArray = field(init=False, repr=False)
-    _scale: float = field(init=False, repr=False)
+    _duration: float = field(init=False, repr=False)
+    _starts_cache: FloatArray | None = field(init=False, repr=False)
+    _integrated: tuple[FloatArray, float] | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        d = np.asarray(self.durations, dtype=float)
-        starts = np.concatenate([[0.0], np.cumsum(d)])
-        state = np.zeros((len(d) + 1, 2))  # position, velocity at piece starts
-        p, v = 0.0, float(self.v0)
-        for k, tk in enumerate(d):
-            a0, j = float(self.accel[k]), float(self.jerk[k])
-            state[k] = (p, v)
-            p = p + v * tk + a0 * tk**2 / 2 + j * tk**3 / 6
-            v = v + a0 * tk + j * tk**2 / 2
-        state[len(d)] = (p, v)
-        object.__setattr__(self, "_starts", starts)
-        object.__setattr__(self, "_state", state)
-        scale = self.distance / p if p > 0 else 0.0
-        object.__setattr__(self, "_scale", scale)
+        # the total is summed in order, as the last entry of ``numpy.cumsum``
+        # (a sequential accumulation); piece starts, positions and velocities
+        # are built on first use: many profiles are only asked for their
+        # duration (then stretched or dropped)
+        total = 0.0
+        for tk in np.asarray(self.durations, dtype=float).tolist():
+            total += tk
+        object.__setattr__(self, "_duration", total)
+        object.__setattr__(self, "_starts_cache", None)
+        object.__setattr__(self, "_integrated", None)
+
+    @property
+    def _starts(self) -> FloatArray:
+        """(P + 1,) piece start times, the last one the duration."""
+        got = self._starts_cache
+        if got is None:
+            d = np.asarray(self.durations, dtype=float)
+            got = np.concatenate([[0.0], np.cumsum(d)])
+            object.__setattr__(self, "_starts_cache", got)
+        return got
+
+    def _integrate(self) -> tuple[FloatArray, float]:
+        got = self._integrated
+        if got is None:
+            # position, velocity at piece starts; plain floats (the same IEEE
+            # operations as on numpy scalars, without their per-element overhead)
+            rows: list[tuple[float, float]] = []
+            p, v = 0.0, float(self.v0)
+            d = np.asarray(self.durations, dtype=float).tolist()
+            acc = np.asarray(self.accel, dtype=float).tolist()
+            jrk = np.asarray(self.jerk, dtype=float).tolist()
+            for tk, a0, j in zip(d, acc, jrk, strict=False):
+                rows.append((p, v))
+                p = p + v * tk + a0 * tk**2 / 2 + j * tk**3 / 6
+                v = v + a0 * tk + j * tk**2 / 2
+            rows.append((p, v))
+            got = (np.array(rows, dtype=float), self.distance / p if p > 0 else 0.0)
+            object.__setattr__(self, "_integrated", got)
+        return got
+
+    @property
+    def _state(self) -> FloatArray:
+        """(P + 1, 2) position and velocity at the piece starts (unscaled)."""
+        return self._integrate()[0]
+
+    @property
+    def _scale(self) -> float:
+        """Factor making the integrated end position equal :attr:`distance`."""
+        return self._integrate()[1]
 
     @property
     def duration(self) -> float:
         """Seconds the move takes."""
-        return float(self._starts[-1])
+        return self._duration
 
     def position(self, t: FloatArray) -> FloatArray:
         """Signed position at times ``t`` (clipped to ``[0, duration]``), vectorised."""

@@ -27,6 +27,7 @@ import numpy as np
 from multiarm.errors import Unreachable, ValidationError
 from multiarm.types import FloatArray, JointVector, Transform
 from workcell.arms._common import FLIP_X, DriveArm, rot_z, vertical_tool_yaw, wrap_near
+from workcell.arms._kinematics_jit import scara_frames
 from workcell.arms.base import LinkShape
 from workcell.arms.profiles import ServoDrive
 
@@ -162,6 +163,14 @@ class Scara(DriveArm):
             )
 
     def frames(self, q: FloatArray) -> FloatArray:
+        qq = np.ascontiguousarray(np.atleast_2d(np.asarray(q, dtype=float)))
+        out: FloatArray = scara_frames(
+            np.ascontiguousarray(self.base, dtype=float), self.l1, self.l2, qq
+        )
+        return out
+
+    def _frames_numpy(self, q: FloatArray) -> FloatArray:
+        """The numpy version of :meth:`frames` (the tests' reference)."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
         n = len(q)
         t1, t2, z, t4 = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
@@ -195,8 +204,11 @@ class Scara(DriveArm):
         c2 = min(1.0, max(-1.0, c2))
         branches = {"left": math.acos(c2), "right": -math.acos(c2)}
         order = [self.elbow] if self.elbow != "nearest" else ["left", "right"]
-        lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
-        cands: list[np.ndarray] = []
+        # plain floats: a handful of candidates, no per-candidate arrays
+        lo = self.joint_limits[:, 0].tolist()
+        hi = self.joint_limits[:, 1].tolist()
+        h = [float(v) for v in hint]
+        cands: list[list[float]] = []
         reasons: list[str] = []
         for b in order:
             t2 = branches[b]
@@ -204,25 +216,26 @@ class Scara(DriveArm):
                 self.l2 * math.sin(t2), self.l1 + self.l2 * math.cos(t2)
             )
             for k in (-1, 0, 1):
-                a1 = wrap_near(t1, float(hint[0])) + 2 * math.pi * k
-                a4 = wrap_near(phi - a1 - t2, float(hint[3]))
-                q = np.array([a1, t2, z, a4])
+                a1 = wrap_near(t1, h[0]) + 2 * math.pi * k
+                a4 = wrap_near(phi - a1 - t2, h[3])
+                q = [a1, t2, z, a4]
                 best4 = [a4 + 2 * math.pi * m for m in (-1, 0, 1)]
                 best4 = [v for v in best4 if lo[3] - 1e-9 <= v <= hi[3] + 1e-9]
                 if best4:
-                    q[3] = min(best4, key=lambda v: abs(v - float(hint[3])))
-                bad = np.flatnonzero((q < lo - 1e-9) | (q > hi + 1e-9))
-                if len(bad):
-                    j = int(bad[0])
+                    q[3] = min(best4, key=lambda v: abs(v - h[3]))
+                bad = [j for j in range(4) if q[j] < lo[j] - 1e-9 or q[j] > hi[j] + 1e-9]
+                if bad:
+                    j = bad[0]
                     reasons.append(
                         f"{b} elbow needs {self.joint_names[j]} = {q[j]:.4g} outside "
                         f"[{lo[j]:.4g}, {hi[j]:.4g}]"
                     )
                     continue
-                cands.append(np.clip(q, lo, hi))
+                cands.append([min(max(v, lo[j]), hi[j]) for j, v in enumerate(q)])
         if not cands:
             raise Unreachable(f"arm {self.name!r}: {'; '.join(dict.fromkeys(reasons))}")
-        return min(cands, key=lambda q: float(np.abs(q - hint).sum()))
+        best = min(cands, key=lambda q: sum(abs(v - w) for v, w in zip(q, h, strict=True)))
+        return np.array(best, dtype=float)
 
     def displacement_bound(self, dq: FloatArray) -> FloatArray:
         out: FloatArray = np.abs(np.atleast_2d(dq)) @ self._reach

@@ -35,6 +35,7 @@ from numba import njit
 from multiarm.errors import Unreachable, ValidationError
 from multiarm.types import FloatArray, JointVector, Transform
 from workcell.arms._common import DriveArm
+from workcell.arms._kinematics_jit import dh_frames
 from workcell.arms.base import JointKind, LinkShape
 from workcell.arms.profiles import ServoDrive
 
@@ -226,6 +227,18 @@ class SerialArm(DriveArm):
         return out
 
     def frames(self, q: FloatArray) -> FloatArray:
+        qq = np.ascontiguousarray(np.atleast_2d(np.asarray(q, dtype=float)))
+        prism = np.fromiter((k == "prismatic" for k in self.joint_kinds), dtype=np.bool_)
+        out: FloatArray = dh_frames(
+            np.ascontiguousarray(self.base, dtype=float),
+            np.ascontiguousarray(self.dh, dtype=float),
+            prism,
+            qq,
+        )
+        return out
+
+    def _frames_numpy(self, q: FloatArray) -> FloatArray:
+        """The numpy version of :meth:`frames` (the tests' reference)."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
         jt = self._joint_transforms(q)
         n = len(self.dh)

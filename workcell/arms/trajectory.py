@@ -40,7 +40,8 @@ from typing import Literal
 import numpy as np
 
 from multiarm.errors import ValidationError
-from multiarm.types import FloatArray
+from multiarm.types import FloatArray, IntArray
+from workcell.arms._kinematics_jit import piecewise_cubic
 from workcell.arms.profiles import Drive, Profile
 
 __all__ = ["Interpolation", "JointTrajectory", "Segment"]
@@ -132,6 +133,13 @@ class JointTrajectory:
 
     def sample(self, t: FloatArray) -> FloatArray:
         """(N, dof) joint vectors at times ``t`` (clipped to ``[0, duration]``), vectorised."""
+        breaks, coef, counts = self._packed
+        tt = np.ascontiguousarray(np.asarray(t, dtype=float).reshape(-1))
+        out: FloatArray = piecewise_cubic(breaks, coef, counts, tt, self.duration)
+        return out
+
+    def _sample_numpy(self, t: FloatArray) -> FloatArray:
+        """The numpy version of :meth:`sample` (the tests' reference)."""
         t = np.clip(np.asarray(t, dtype=float).reshape(-1), 0.0, self.duration)
         out = np.empty((len(t), self.dof))
         for j, (breaks, coef) in enumerate(self._pieces):
@@ -142,33 +150,48 @@ class JointTrajectory:
         return out
 
     @cached_property
+    def _packed(self) -> tuple[FloatArray, FloatArray, IntArray]:
+        """:attr:`_pieces` in padded arrays: breaks (dof, P), coefficients
+        (dof, P, 4) and the pieces per joint (dof,), for the compiled sampler."""
+        pieces = self._pieces
+        width = max(len(b) for b, _ in pieces)
+        breaks = np.full((len(pieces), width), np.inf)
+        coef = np.zeros((len(pieces), width, 4))
+        counts = np.zeros(len(pieces), dtype=np.int64)
+        for j, (b, c) in enumerate(pieces):
+            breaks[j, : len(b)] = b
+            coef[j, : len(b)] = c
+            counts[j] = len(b)
+        return breaks, coef, counts
+
+    @cached_property
     def _pieces(self) -> list[tuple[FloatArray, FloatArray]]:
         """Per joint: piece start times (P,) and cubic coefficients (P, 4) of
         the position in the time since the piece's start (built once)."""
         out = []
+        knots = self.knot_times.tolist()
+        starts_q = [seg.q0.tolist() for seg in self.segments]
         for j in range(self.dof):
             breaks: list[float] = []
             coef: list[tuple[float, float, float, float]] = []
             for i, seg in enumerate(self.segments):
-                t0 = float(self.knot_times[i])
-                q0 = float(seg.q0[j])
+                # plain floats: the same IEEE operations as on numpy scalars
+                t0 = float(knots[i])
+                q0 = float(starts_q[i][j])
                 p = seg.profiles[j] if seg.profiles else None
                 if p is None or len(p.durations) == 0:
                     breaks.append(t0)
                     coef.append((q0, 0.0, 0.0, 0.0))
                     continue
                 sc = p._scale
+                state = p._state.tolist()
+                starts = p._starts.tolist()
+                acc = np.asarray(p.accel, dtype=float).tolist()
+                jrk = np.asarray(p.jerk, dtype=float).tolist()
                 for k in range(len(p.durations)):
-                    p0, v0 = p._state[k]
-                    breaks.append(t0 + float(p._starts[k]))
-                    coef.append(
-                        (
-                            q0 + sc * p0,
-                            sc * v0,
-                            sc * float(p.accel[k]) / 2,
-                            sc * float(p.jerk[k]) / 6,
-                        )
-                    )
+                    p0, v0 = state[k]
+                    breaks.append(t0 + starts[k])
+                    coef.append((q0 + sc * p0, sc * v0, sc * acc[k] / 2, sc * jrk[k] / 6))
                 if p.duration < seg.duration:  # this joint stops before the segment ends
                     breaks.append(t0 + p.duration)
                     coef.append((q0 + p.distance, 0.0, 0.0, 0.0))
@@ -259,10 +282,10 @@ def move_segment(
     speed: float = 1.0,
 ) -> Segment | None:
     """One rest-to-rest move from ``q0`` to ``q1`` (None when nothing moves)."""
-    dq = np.asarray(q1, dtype=float) - np.asarray(q0, dtype=float)
+    dq = (np.asarray(q1, dtype=float) - np.asarray(q0, dtype=float)).tolist()
     profiles: list[Profile | None] = []
-    for j, drive in enumerate(drives):
-        p = drive.profile(float(dq[j]), speed) if dq[j] != 0 else None
+    for drive, dj in zip(drives, dq, strict=False):
+        p = drive.profile(dj, speed) if dj != 0 else None
         profiles.append(p if p is not None and p.duration > 0 else None)
     if all(p is None for p in profiles):
         return None

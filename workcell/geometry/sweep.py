@@ -86,8 +86,8 @@ import numpy as np
 
 from multiarm.errors import UsageError, ValidationError
 from multiarm.types import BoolArray, FloatArray, IntArray
-from workcell.arms.base import Arm, LinkShape
-from workcell.geometry._sweep_jit import capsules_touch, contacts_block
+from workcell.arms.base import Arm, LinkShape, shape_frames
+from workcell.geometry._sweep_jit import capsules_touch, contacts_block, segment_points
 from workcell.geometry.world import CollisionWorld
 from zones.geometry import Primitive
 from zones.model import ZoneMap
@@ -278,8 +278,31 @@ def sample_trajectory(
 # ---------------------------------------------------------------- geometry
 
 
+_CAPSULES: dict[int, tuple[tuple[LinkShape, ...], FloatArray, FloatArray]] = {}
+"""Bounding capsules by ``id`` of an arm's shapes tuple (the tuple is kept so
+the id stays its)."""
+
+_CAPSULES_SIZE = 64
+
+
 def _shape_capsules(shapes: Sequence[LinkShape]) -> tuple[FloatArray, FloatArray]:
-    """Local segment end points (S, 2, 3) and radii (S,) of capsules holding the shapes."""
+    """Local segment end points (S, 2, 3) and radii (S,) of capsules holding the shapes.
+
+    Built once per shapes tuple (an arm's ``shapes``); the caller gets copies.
+    """
+    if not isinstance(shapes, tuple):
+        return _build_capsules(shapes)
+    hit = _CAPSULES.get(id(shapes))
+    if hit is None or hit[0] is not shapes:
+        ends, rad = _build_capsules(shapes)
+        if len(_CAPSULES) >= _CAPSULES_SIZE:
+            _CAPSULES.pop(next(iter(_CAPSULES)))
+        hit = (shapes, ends, rad)
+        _CAPSULES[id(shapes)] = hit
+    return hit[1].copy(), hit[2].copy()
+
+
+def _build_capsules(shapes: Sequence[LinkShape]) -> tuple[FloatArray, FloatArray]:
     ends = np.zeros((len(shapes), 2, 3))
     rad = np.zeros(len(shapes))
     for i, s in enumerate(shapes):
@@ -299,8 +322,24 @@ def _shape_capsules(shapes: Sequence[LinkShape]) -> tuple[FloatArray, FloatArray
 
 
 def _segments(arm: Arm, q: FloatArray, local: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """World end points p0, p1 (N, S, 3) of the shapes' capsule segments."""
-    tf = arm.shape_transforms(q)
+    """World end points p0, p1 (N, S, 3) of the shapes' capsule segments.
+
+    The end points are carried into their frames once (``offset @ [p, 1]``)
+    and moved by the frames in one compiled loop; equal to
+    :func:`_segments_numpy` up to the order of floating additions.
+    """
+    fr = np.ascontiguousarray(arm.frames(np.atleast_2d(q)), dtype=float)
+    idx, off = shape_frames(arm)
+    hw = np.einsum("sij,skj->ski", off, np.concatenate([local, np.ones((len(local), 2, 1))], 2))
+    pts = segment_points(fr, idx, np.ascontiguousarray(hw))
+    return pts[0], pts[1]
+
+
+def _segments_numpy(arm: Arm, q: FloatArray, local: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The numpy version of :func:`_segments` (the tests' reference)."""
+    fr = arm.frames(np.atleast_2d(q))
+    idx, off = shape_frames(arm)
+    tf = np.matmul(fr[:, idx], off)
     rot, trans = tf[..., :3, :3], tf[..., :3, 3]
     p0 = np.matmul(rot, local[:, 0, :, None])[..., 0] + trans
     p1 = np.matmul(rot, local[:, 1, :, None])[..., 0] + trans
