@@ -24,6 +24,7 @@ built-in task set or zone map (``supersigma``, ``scara4``, ``cell8``)::
     padding = 0.005                    # sweep padding, metres (zone windows are conservative by it)
     park = "home"                      # after each task the arm returns to its start joints ("home"),
                                        # or stays at the task's last pose ("last")
+    separate_arms = true               # arm-pair zones: arms never meet outside the SDL zones
 
     [arms.left]                        # one table per arm; see workcell.arms.arm_from_dict
     type = "gantry"
@@ -106,6 +107,12 @@ class Cell:
         leaves it at the task's last pose, where it may block other arms
         (S2.6 geometric deadlock, answered by the blocking oracle) until it
         travels to its next task, and for good after its last one.
+    separate_arms : bool
+        Give every pair of arms whose reach overlaps an implicit exclusive
+        zone ``"a|b"`` (:mod:`workcell.geometry.reach`), so that two arms
+        moving at the same time can never meet outside the SDL zones. On by
+        default; off leaves arms apart only where the SDL zones and the
+        parked-arm oracle keep them.
     description : str
     source : str or None
         The cell file it was read from.
@@ -121,6 +128,7 @@ class Cell:
     seed: int = 0
     padding: float = 0.005
     park: Park = "home"
+    separate_arms: bool = True
     description: str = ""
     source: str | None = field(default=None, compare=False)
 
@@ -200,7 +208,7 @@ class Cell:
 # ------------------------------------------------------------------ loader
 
 _TOP_KEYS = {"name", "description", "zones", "tasks", "tdl", "compile", "arms"}
-_COMPILE_KEYS = {"plan_with", "releases", "seed", "padding", "park"}
+_COMPILE_KEYS = {"plan_with", "releases", "seed", "padding", "park", "separate_arms"}
 _TOML_POS = re.compile(r"\(at line (\d+), column (\d+)\)")
 
 
@@ -330,6 +338,9 @@ def cell_from_dict(
     park = comp.get("park", "home")
     if park not in ("home", "last"):
         raise _fail(f"{top}: compile.park", f"expected 'home' or 'last', got {park!r}")
+    separate = comp.get("separate_arms", True)
+    if not isinstance(separate, bool):
+        raise _fail(f"{top}: compile.separate_arms", f"expected true or false, got {separate!r}")
     arms_data = data.get("arms")
     if not isinstance(arms_data, Mapping) or not arms_data:
         raise _fail(f"{top}: arms", "expected a table with at least one [arms.NAME] table")
@@ -371,6 +382,7 @@ def cell_from_dict(
             seed=seed,
             padding=float(padding),
             park=park,
+            separate_arms=separate,
             description=description,
             source=filename,
         )

@@ -47,7 +47,7 @@ import math
 import time
 import weakref
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -60,7 +60,13 @@ from tasklib.model import Task
 from workcell.arms import DriveArm, JointTrajectory, Segment
 from workcell.arms.trajectory import Interpolation, move_segment
 from workcell.cell import Cell
-from workcell.geometry import static_occupancy, zone_windows
+from workcell.geometry import sample_trajectory, static_occupancy, zone_contacts, zone_windows
+from workcell.geometry.reach import (
+    arm_capsules,
+    capsules_box,
+    shared_blocks,
+    windows_from_flags,
+)
 from workcell.oracle import CellOracle
 from workcell.program import Program, expand_task
 
@@ -72,6 +78,11 @@ __all__ = [
     "compile_cell_detailed",
     "compile_details",
 ]
+
+SPACE_GRID = 0.3
+"""Block side (metres) of the space-grid zones that keep arms apart
+(:mod:`workcell.geometry.reach`): coarser blocks give fewer zones and a faster
+search but keep apart more pairs of modes than needed (S2.12)."""
 
 LINEAR_STEP = 0.02
 """Longest Cartesian step (metres) between inverse-kinematics solutions on a
@@ -339,7 +350,8 @@ def compile_cell_detailed(
             )
         if progress is not None:
             progress(ti + 1, len(ts.tasks))
-    m = _model(cell, releases, group_of, preds, tool_names, active, modes)
+    modes, pair_zones = _pair_windows(cell, modes)
+    m = _model(cell, releases, group_of, preds, tool_names, active, modes, pair_zones)
     oracle = CellOracle(cell)
     problem, ordered = _build(m, cell, modes, oracle)
     if cell.park == "home":
@@ -367,7 +379,7 @@ def compile_cell_detailed(
                     raise NoFeasibleSchedule(
                         f"cell {cell.name!r}: no arm can do task {task.id!r} ({why_all})"
                     )
-            m = _model(cell, releases, group_of, preds, tool_names, active, modes)
+            m = _model(cell, releases, group_of, preds, tool_names, active, modes, pair_zones)
             problem, ordered = _build(m, cell, modes, oracle)
     out = CompiledCell(cell, problem, ordered, rejected, time.perf_counter() - t0)
     _DETAILS[problem] = out
@@ -382,11 +394,14 @@ def _model(
     tool_names: list[str],
     active: Any,
     modes: list[tuple[tuple[int, int], CompiledMode]],
+    pair_zones: tuple[str, ...] = (),
 ) -> Model:
     ts, zm = cell.taskset, cell.zone_map
     m = Model(cell.name)
     for z in range(zm.n_zones):
         m.add_zone(zm.zone_names()[z], "exclusive" if bool(zm.exclusive_mask()[z]) else "shared")
+    for name in pair_zones:
+        m.add_zone(name, "exclusive")
     for k in tool_names:
         m.add_tool(k)
     for arm, q in zip(cell.arms, cell.start, strict=True):
@@ -400,6 +415,58 @@ def _model(
         m.add_mode(cm.task, cm.arm, cm.duration, windows=cm.windows, tools=cm.tools)
     m.set_setup(JointTravelSetup(cell, modes))
     return m
+
+
+def _pair_windows(
+    cell: Cell, modes: list[tuple[tuple[int, int], CompiledMode]]
+) -> tuple[list[tuple[tuple[int, int], CompiledMode]], tuple[str, ...]]:
+    """Add the space-grid zones' windows to the modes (:mod:`workcell.geometry.reach`).
+
+    The space two or more arms can reach is cut into blocks of
+    :data:`SPACE_GRID` metres; every block that modes of two or more arms
+    touch becomes an exclusive zone, with each mode's occupancy windows from
+    the zone sweep. Two arms can then never be where they could meet at the
+    same time. Returns the modes with their new windows and the zones used.
+    """
+    if not cell.separate_arms or len(cell.arms) < 2:
+        return modes, ()
+    pad = cell.padding
+    samples: list[tuple[FloatArray, FloatArray]] = []
+    boxes: list[list[FloatArray]] = [[] for _ in cell.arms]
+    for (_t, a), cm in modes:
+        arm = cell.arms[a]
+        t, q = sample_trajectory(arm, cm.trajectory, pad)
+        samples.append((t, q))
+        boxes[a].append(capsules_box(*arm_capsules(arm, q), pad))
+    for a, (arm, q0) in enumerate(zip(cell.arms, cell.start, strict=True)):
+        boxes[a].append(capsules_box(*arm_capsules(arm, np.asarray(q0, dtype=float)), pad))
+    reach = [
+        np.stack([np.min([b[0] for b in bs], 0), np.max([b[1] for b in bs], 0)]) for bs in boxes
+    ]
+    blocks = shared_blocks(reach, SPACE_GRID)
+    if blocks.n_zones == 0:
+        return modes, ()
+    names = blocks.zone_names()
+    spans: list[list[tuple[int, float, float]]] = []
+    users: list[set[int]] = [set() for _ in range(blocks.n_zones)]
+    for i, ((_t, a), cm) in enumerate(modes):
+        t, q = samples[i]
+        flags = zone_contacts(cell.arms[a], q, blocks, pad)
+        dur = cm.duration
+        mine: list[tuple[int, float, float]] = []
+        for z in np.flatnonzero(flags.any(axis=0)):
+            for s, e in windows_from_flags(t, flags[:, z]):
+                s, e = max(0.0, s), min(dur, e)
+                if e > s:
+                    mine.append((int(z), s, e))
+                    users[int(z)].add(a)
+        spans.append(mine)
+    keep = {z for z in range(blocks.n_zones) if len(users[z]) >= 2}
+    out = []
+    for i, (key, cm) in enumerate(modes):
+        extra = tuple(Window(names[z], s, e, "occupy") for z, s, e in spans[i] if z in keep)
+        out.append((key, replace(cm, windows=cm.windows + extra) if extra else cm))
+    return out, tuple(names[z] for z in sorted(keep))
 
 
 def _build(
