@@ -84,6 +84,10 @@ SPACE_GRID = 0.3
 (:mod:`workcell.geometry.reach`): coarser blocks give fewer zones and a faster
 search but keep apart more pairs of modes than needed (S2.12)."""
 
+GRID_PADDING = 0.02
+"""Sweep padding (metres) against the space-grid blocks, when the cell's own
+padding is finer: fewer samples, windows conservative by this much."""
+
 LINEAR_STEP = 0.02
 """Longest Cartesian step (metres) between inverse-kinematics solutions on a
 straight-line move: the joint path between them is interpolated in joint
@@ -430,7 +434,9 @@ def _pair_windows(
     """
     if not cell.separate_arms or len(cell.arms) < 2:
         return modes, ()
-    pad = cell.padding
+    # The blocks are coarse, so the sweep against them samples more coarsely
+    # too: the guarantee holds for any padding (windows grow by it).
+    pad = max(cell.padding, GRID_PADDING)
     samples: list[tuple[FloatArray, FloatArray]] = []
     boxes: list[list[FloatArray]] = [[] for _ in cell.arms]
     for (_t, a), cm in modes:
