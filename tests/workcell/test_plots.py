@@ -34,9 +34,12 @@ def test_gantt_has_a_lane_per_arm_zone_and_tool(planned: tuple[CompiledCell, Sch
     fig = gantt(p, s)
     ax = fig.axes[0]
     labels = [t.get_text() for t in ax.get_yticklabels()]
+    sdl = [z for z in p.zone_names if not z.startswith("grid_")]
+    assert len(sdl) < p.n_zones  # the compile's space-grid zones share one lane
     assert labels == [
         *p.arm_names,
-        *(f"zone {z}" for z in p.zone_names),
+        *(f"zone {z}" for z in sdl),
+        "zone space grid",
         *(f"tool {k}" for k in p.tool_names),
     ]
     assert sorted(_gids(fig, "planned:")) == sorted(f"planned:{t}" for t in p.task_names)
@@ -85,7 +88,13 @@ def test_zone_timeline_lanes_and_bars(planned: tuple[CompiledCell, Schedule]) ->
     for data in (res, frame):
         fig = zone_timeline(data)
         labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
-        zones = list(dict.fromkeys(r.resource for r in res if r.kind != "tool"))
+        zones = list(
+            dict.fromkeys(
+                "space grid" if r.resource.startswith("grid_") else r.resource
+                for r in res
+                if r.kind != "tool"
+            )
+        )
         tools = list(dict.fromkeys(r.resource for r in res if r.kind == "tool"))
         assert labels == [*(f"zone {z}" for z in zones), *(f"tool {k}" for k in tools)]
         assert len(fig.axes[0].patches) == sum(r.end > r.start for r in res)

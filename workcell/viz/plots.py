@@ -148,9 +148,17 @@ def _reservations_frame(data: Any, problem: Problem | None = None) -> pd.DataFra
     )
 
 
+GRID_LANE = "space grid"
+"""The one lane of all the compile's space-grid zones (``grid_X_Y_Z``,
+:mod:`workcell.geometry.reach`): there are tens to hundreds of them."""
+
+
 def _lane_of(kind: str, resource: str) -> tuple[str, str]:
-    """Zone reservations of every kind share one lane per zone; tools have their own."""
-    return ("tool" if kind == "tool" else "zone", str(resource))
+    """Zone reservations of every kind share one lane per zone (the space-grid
+    zones one lane together); tools have their own."""
+    if kind == "tool":
+        return ("tool", str(resource))
+    return ("zone", GRID_LANE if str(resource).startswith("grid_") else str(resource))
 
 
 # ------------------------------------------------------------------ gantt
@@ -212,11 +220,12 @@ def gantt(
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = _figure(ax, (11, 1.2 + 0.32 * (problem.n_arms + problem.n_zones + 2)))
+    n_lanes = problem.n_arms + len({_lane_of("zone", z) for z in problem.zone_names})
+    fig, ax = _figure(ax, (11, 1.2 + 0.32 * (n_lanes + problem.n_tools)))
     colours = _arm_colours(problem.arm_names)
     lane_keys: list[tuple[str, str]] = [("arm", a) for a in problem.arm_names]
     if lanes:
-        lane_keys += [("zone", z) for z in problem.zone_names]
+        lane_keys += list(dict.fromkeys(_lane_of("zone", z) for z in problem.zone_names))
         lane_keys += [("tool", k) for k in problem.tool_names]
     y_of = {key: -i for i, key in enumerate(lane_keys)}
     split = executed is not None
