@@ -10,9 +10,13 @@ from benchmarks import (
     bench_generated,
     bench_geometry,
     bench_kernel,
+    bench_network,
     bench_oracle,
     bench_resolve,
     bench_scale,
+    bench_sim,
+    bench_simkernel,
+    bench_sweep,
     bench_zones,
 )
 
@@ -26,9 +30,13 @@ def main() -> None:
         bench_geometry,
         bench_cells,
         bench_resolve,
+        bench_sim,
+        bench_simkernel,
+        bench_network,
         bench_scale,
         bench_generated,
         bench_fjsp,
+        bench_sweep,
     ):
         print(f"== {mod.__name__}", flush=True)
         sys.argv = [mod.__name__, *quick]

@@ -25,6 +25,10 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_geometry",
         "bench_oracle",
         "bench_cells",
+        "bench_sim",
+        "bench_simkernel",
+        "bench_network",
+        "bench_sweep",
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:

@@ -48,7 +48,16 @@ def test_cell_file_example_in_docs_loads() -> None:
 
 
 @pytest.mark.parametrize(
-    "name", ["tasklib.md", "zones.md", "scheduler.md", "workcell.md", "README"]
+    "name",
+    [
+        "tasklib.md",
+        "zones.md",
+        "scheduler.md",
+        "workcell.md",
+        "networks.md",
+        "simulation.md",
+        "README",
+    ],
 )
 def test_python_examples_in_docs_run(
     name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
@@ -65,3 +74,42 @@ def test_python_examples_in_docs_run(
     namespace: dict[str, object] = {}
     for block in code:
         exec(compile(block, f"{path.name}", "exec"), namespace)
+
+
+@pytest.mark.parametrize("name", ["getting-started.md", "sweeps.md"])
+def test_python_examples_of_the_site_pages_run(
+    name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    code = re.findall(r"```python\n(.*?)```", (DOCS / name).read_text(), flags=re.S)
+    assert code
+    monkeypatch.chdir(tmp_path)
+    namespace: dict[str, object] = {}
+    for block in code:
+        exec(compile(block, name, "exec"), namespace)
+
+
+@pytest.mark.slow
+def test_the_docs_site_builds_with_warnings_as_errors(tmp_path: Path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    proc = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],
+        cwd=DOCS.parent,
+        env={**os.environ, "NO_MKDOCS_2_WARNING": "1"},
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    site = tmp_path / "site"
+    for page in ("index", "getting-started", "sweeps", "benchmarks", "timing", "papers"):
+        assert (site / (page + "/index.html" if page != "index" else "index.html")).is_file()
+    api = (site / "api" / "scheduler" / "index.html").read_text()
+    assert "validate" in api and "lower_bound" in api  # written from the docstrings
+    tutorial = (site / "tutorials" / "tutorial" / "index.html").read_text()
+    assert "gantt" in tutorial and (site / "tutorials" / "tutorial.ipynb").is_file()
+    bench = (site / "benchmarks" / "index.html").read_text()
+    assert "mk01" in bench  # the stored tables are included

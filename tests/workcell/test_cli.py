@@ -13,8 +13,10 @@ from workcell.cli import main
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def test_demo_compiles_and_schedules_every_builtin_cell(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["demo", "--time-limit", "0.5"]) == 0
+def test_demo_compiles_and_schedules_every_builtin_cell(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["demo", "--time-limit", "0.5", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     for name in ("supersigma", "scara4", "cell8"):
         assert f"== {name}:" in out
@@ -22,6 +24,10 @@ def test_demo_compiles_and_schedules_every_builtin_cell(capsys: pytest.CaptureFi
     assert out.count("per arm:") == 3 and out.count("per zone:") == 3
     for solver in ("greedy", "tree", "cpsat"):  # the scheduling step ran with every solver
         assert out.count(f"\n{solver} ") == 3
+    for name in ("supersigma", "scara4", "cell8"):  # each plan ran, as planned and with a failure
+        for run in ("nominal", "arm_failure"):
+            assert (tmp_path / name / run / "trace.json").is_file()
+            assert (tmp_path / name / run / "gantt.png").is_file()
 
 
 def test_schedule_and_check_cells(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

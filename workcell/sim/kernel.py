@@ -71,7 +71,7 @@ class Handle(list[Any]):
 
     Parameters
     ----------
-    entry : tuple
+    iterable : tuple
         ``(time, priority, seq, callback, args, False)``: virtual time
         (seconds), priority (lower runs first among callbacks at the same
         time), tie-break counter (the order of scheduling), the function and

@@ -1,0 +1,313 @@
+"""Simulation speed and re-solving in the loop, on ``cell8`` (8 arms).
+
+Side by side in one run, on one plan (the tree search's, seeded):
+
+* **speed** -- simulated seconds per wall second of :func:`workcell.simulate`
+  at event level (idle controller ticks skipped) and with every controller
+  tick of every arm modelled (``tick=1e-3``, S2.3), best of a few runs; the
+  safety monitor is off for these two rows (it has its own row, at event
+  level, because its FCL checks at every sample dominate);
+* **re-solving** -- seeded fault scenarios (a part arriving late, a crash
+  stopping an arm, an arm failing for good) run twice with the same faults:
+  with re-solving (the coordinator asks :func:`scheduler.reschedule` for a
+  new plan within its real-time budget) and without (``simulate(...,
+  resolve=False)``: the coordinator keeps the plan and waits; an arm failure
+  then leaves its tasks failed). Reported:
+  the re-solve latency (p50/p99 over every re-solve of every scenario) and
+  the executed makespan and failed tasks with and without re-solving.
+
+Targets (issue): >= 2000x at event level, >= 100x at 1 ms ticks.
+Results: ``benchmarks/results/sim.json`` and ``sim.md``.
+
+Run: ``python -m benchmarks.bench_sim [--cell cell8] [--scenarios 6] [--seed 0] [--quick]``
+(``--quick``: supersigma, one repeat, two scenarios; seconds).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import signal
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+
+from benchmarks.common import write
+from multiarm.errors import MultiarmError
+from scheduler import solve, validate
+from workcell import compile_cell_detailed, load_example
+from workcell.sim.faults import FaultPlan
+from workcell.sim.run import simulate
+
+EVENT_TARGET = 2000.0
+TICK_TARGET = 100.0
+
+
+def _speed(cc: Any, plan: Any, repeat: int, **kw: Any) -> dict[str, Any]:
+    """Best simulated-seconds-per-wall-second over ``repeat`` runs."""
+    rates, walls = [], []
+    last = None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        last = simulate(cc, plan, seed=0, **kw)
+        wall = time.perf_counter() - t0
+        walls.append(wall)
+        rates.append(float(last.metrics.executed_makespan) / wall)
+    assert last is not None
+    m = last.metrics
+    return {
+        "rate": max(rates),
+        "rates": rates,
+        "wall_s": min(walls),
+        "simulated_s": float(m.executed_makespan),
+        "events": int(m.events),
+        "ticks": int(m.ticks),
+        "trace": len(last.trace),
+        "failed_tasks": int(m.failed_tasks),
+    }
+
+
+def _scenarios(cc: Any, plan: Any, n: int, seed: int) -> list[tuple[str, FaultPlan]]:
+    """``n`` seeded fault scenarios, cycling through late part, crash, arm failure."""
+    p = cc.problem
+    rng = np.random.default_rng(seed)
+    arriving = sorted(cc.cell.taskset.expected_arrivals())  # parts with an arrival model
+    mk = plan.makespan
+    arms = plan.arms(p)
+    busy = [a for a in range(p.n_arms) if (arms == a).any()]
+    spare = [
+        a
+        for a in busy
+        if all(any(int(p.mode_arm[m]) != a for m in p.task_modes[t]) for t in range(p.n_tasks))
+    ] or busy
+    out = []
+    for i in range(n):
+        kind = ("late_part", "crash", "arm_failure")[i % 3]
+        at = round(float(rng.uniform(0.2, 0.6)) * mk, 3)
+        if kind == "late_part":
+            rec = {"kind": kind, "part": str(rng.choice(arriving)), "delay": round(0.1 * mk, 3)}
+            label = f"part {rec['part']!r} {rec['delay']:g} s late"
+        elif kind == "crash":
+            arm = p.arm_names[int(rng.choice(busy))]
+            rec = {"kind": kind, "arm": arm, "at": at, "recovery": 5.0}
+            label = f"crash of {arm} at {at:g} s (5 s to recover)"
+        else:
+            arm = p.arm_names[int(rng.choice(spare))]
+            rec = {"kind": kind, "arm": arm, "at": at}
+            label = f"{arm} fails at {at:g} s"
+        out.append((label, FaultPlan.from_dicts([rec])))
+    return out
+
+
+class _Overrun(Exception):
+    """A run went past its wall-clock cap."""
+
+
+@contextmanager
+def _wall_cap(seconds: float) -> Iterator[None]:
+    """Stop the body with :class:`_Overrun` after ``seconds`` of wall time (SIGALRM)."""
+
+    def stop(_signum: int, _frame: object) -> None:
+        raise _Overrun
+
+    old = signal.signal(signal.SIGALRM, stop)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, old)
+
+
+def _faulty_run(
+    cc: Any, plan: Any, faults: FaultPlan, seed: int, cap: float, resolve: bool = True
+) -> dict[str, Any]:
+    """One run under ``faults``: makespan, failed tasks, re-solves and their latencies
+    (``resolve=False``: the coordinator keeps the plan)."""
+    try:
+        with _wall_cap(cap):
+            r = simulate(cc, plan, seed=seed, faults=faults, monitor=False, resolve=resolve)
+    except _Overrun:
+        return {
+            "makespan": math.nan,
+            "failed": None,
+            "resolves": None,
+            "latency": [],
+            "stopped": f"not finished after {cap:g} s",
+        }
+    except MultiarmError as exc:
+        return {
+            "makespan": math.nan,
+            "failed": None,
+            "resolves": None,
+            "latency": [],
+            "stopped": str(exc),
+        }
+    m = r.metrics
+    return {
+        "makespan": float(m.executed_makespan),
+        "failed": int(m.failed_tasks),
+        "resolves": int(m.resolves),
+        "latency": np.asarray(m.resolve_latency, dtype=float).tolist(),
+        "stopped": "",
+    }
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    ap.add_argument("--cell", default="cell8")
+    ap.add_argument("--scenarios", type=int, default=6)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--time-limit", type=float, default=5.0, help="tree search budget, seconds")
+    ap.add_argument("--tick", type=float, default=1e-3, help="controller period, seconds")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument(
+        "--cap", type=float, default=120.0, help="wall-clock cap of one fault run, seconds"
+    )
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args(argv)
+    if args.quick:
+        args.cell, args.scenarios, args.repeat, args.time_limit = "supersigma", 2, 1, 1.0
+
+    t0 = time.perf_counter()
+    cc = compile_cell_detailed(load_example(args.cell))
+    compile_s = time.perf_counter() - t0
+    p = cc.problem
+    r = solve(p, "tree", time_limit=args.time_limit, seed=args.seed)
+    assert r.schedule is not None
+    plan = r.schedule
+    planned = validate(p, plan)
+    simulate(cc, plan, seed=0, monitor=False)  # warm caches and compiled code once
+
+    print("bench_sim: event level", file=sys.stderr, flush=True)
+    event = _speed(cc, plan, args.repeat, monitor=False)
+    try:
+        monitored: dict[str, Any] = _speed(cc, plan, 1, monitor=True)
+    except MultiarmError as exc:  # the monitor stopped the run: say so in the table
+        monitored = {"error": str(exc)}
+    print("bench_sim: every tick", file=sys.stderr, flush=True)
+    tick = _speed(cc, plan, max(1, args.repeat - 1), monitor=False, tick=args.tick)
+
+    scen: list[dict[str, Any]] = []
+    stops: list[str] = []
+    latencies: list[float] = []
+    for label, faults in _scenarios(cc, plan, args.scenarios, args.seed):
+        print(f"bench_sim: fault: {label}", file=sys.stderr, flush=True)
+        with_r = _faulty_run(cc, plan, faults, args.seed, args.cap)
+        without = _faulty_run(cc, plan, faults, args.seed, args.cap, resolve=False)
+        latencies += with_r["latency"]
+        scen.append(
+            {"fault": label, "faults": faults.to_dicts(), "with": with_r, "without": without}
+        )
+    lat_ms = np.asarray(latencies) * 1e3
+    budget_ms = 15.0  # simulate's default resolve_budget
+
+    def q(k: float) -> str:
+        return f"{float(np.percentile(lat_ms, k)):.2f}" if lat_ms.size else "-"
+
+    def verdict(rate: float, target: float) -> str:
+        return "met" if rate >= target else f"**missed** ({rate / target:.2f} of the target)"
+
+    def fmt(x: float) -> str:
+        return f"{x:.1f}" if math.isfinite(x) else "-"
+
+    lines = [
+        f"# Simulation: {args.cell} ({p.n_arms} arms, {p.n_tasks} tasks)",
+        "",
+        f"Plan: tree search, {args.time_limit:g} s, seed {args.seed}: makespan {planned:.1f} s "
+        f"(compile {compile_s:.1f} s). Simulation seed 0, ideal medium. Best of {args.repeat} "
+        "runs (ticks: of "
+        f"{max(1, args.repeat - 1)}). One process on a shared 2-core machine.",
+        "",
+        "| run | simulated s | wall s | simulated s per wall s | target | kernel events | ticks |",
+        "|---|---|---|---|---|---|---|",
+        f"| event level (monitor off) | {event['simulated_s']:.1f} | {event['wall_s']:.3f} | "
+        f"{event['rate']:.0f}x | >= {EVENT_TARGET:.0f}x: {verdict(event['rate'], EVENT_TARGET)} | "
+        f"{event['events']} | {event['ticks']} |",
+        f"| every {args.tick * 1e3:g} ms tick, all {p.n_arms} arms (monitor off) | "
+        f"{tick['simulated_s']:.1f} | {tick['wall_s']:.3f} | {tick['rate']:.0f}x | "
+        f">= {TICK_TARGET:.0f}x: {verdict(tick['rate'], TICK_TARGET)} | {tick['events']} | "
+        f"{tick['ticks']} |",
+        (
+            f"| event level, safety monitor on | {monitored['simulated_s']:.1f} | "
+            f"{monitored['wall_s']:.3f} | {monitored['rate']:.0f}x | - | {monitored['events']} | "
+            f"{monitored['ticks']} |"
+            if "error" not in monitored
+            else f"| event level, safety monitor on | - | - | - | - | the monitor stopped the run: "
+            f"{monitored['error']} | - |"
+        ),
+        *(
+            [
+                "",
+                f"**Incomplete runs**: without any fault, {event['failed_tasks']} of {p.n_tasks} "
+                "tasks were reported failed, so the rates above are over a run that stopped "
+                f"early ({event['simulated_s']:.1f} s simulated of the {planned:.1f} s planned).",
+            ]
+            if event["failed_tasks"]
+            else []
+        ),
+        "",
+        f"## Re-solving in the loop ({len(scen)} seeded fault scenarios, the same faults twice)",
+        "",
+        f"Re-solve latency over {lat_ms.size} re-solves: p50 {q(50)} ms, p99 {q(99)} ms "
+        f"(max {float(lat_ms.max()) if lat_ms.size else math.nan:.2f} ms); "
+        f"{int(np.sum(lat_ms > budget_ms))} over the {budget_ms:g} ms budget.",
+        "",
+        "| fault | executed makespan, re-solving (s) | failed | re-solves | "
+        "executed makespan, keeping the plan (s) | failed |",
+        "|---|---|---|---|---|---|",
+    ]
+    for sc in scen:
+        w, wo = sc["with"], sc["without"]
+        if w["stopped"] or wo["stopped"]:
+            stops.append(
+                f"{sc['fault']}: "
+                + "; ".join(
+                    f"{which}: {r['stopped']}"
+                    for which, r in (("re-solving", w), ("keeping the plan", wo))
+                    if r["stopped"]
+                )
+            )
+        lines.append(
+            f"| {sc['fault']} | {fmt(w['makespan'])} | {w['failed'] if w['failed'] is not None else '-'} | "
+            f"{w['resolves'] if w['resolves'] is not None else '-'} | "
+            f"{fmt(wo['makespan'])} | {wo['failed'] if wo['failed'] is not None else '-'} |"
+        )
+    if stops:
+        lines += ["", "Runs that did not finish (-):", "", *(f"- {x}" for x in stops)]
+    lines += [
+        "",
+        "Without re-solving the coordinator keeps the plan: late parts and stops push the "
+        "following tasks back, and a failed arm's tasks and the tasks after them are reported "
+        "failed while the other arms go on (the makespan is then over the tasks that ran). "
+        "Without re-solving is `simulate(..., resolve=False)`.",
+    ]
+    path = write(
+        "sim",
+        {
+            "cell": args.cell,
+            "seed": args.seed,
+            "time_limit": args.time_limit,
+            "tick": args.tick,
+            "planned_makespan": planned,
+            "compile_s": compile_s,
+            "event_level": event,
+            "tick_level": tick,
+            "monitored": monitored,
+            "targets": {"event_level": EVENT_TARGET, "tick_level": TICK_TARGET},
+            "resolve_latency_ms": lat_ms.tolist(),
+            "scenarios": scen,
+        },
+        "\n".join(lines) + "\n",
+    )
+    print(path.read_text())
+
+
+if __name__ == "__main__":
+    main()

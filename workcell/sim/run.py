@@ -1,0 +1,693 @@
+"""``simulate``: execute a schedule in the simulated cell and return the result.
+
+The run puts together the event kernel (:mod:`workcell.sim.kernel`), a
+medium (:mod:`workcell.sim.medium`, or one of :mod:`workcell.sim.network`
+by name), the coordinator (:mod:`workcell.sim.coordinator`), one S2.3
+controller per arm (:mod:`workcell.sim.controller`), the faults
+(:mod:`workcell.sim.faults`) and the independent safety monitor
+(:mod:`workcell.sim.monitor`), and returns a :class:`SimResult`.
+
+Examples
+--------
+>>> from workcell import load_example, compile_cell_detailed
+>>> from scheduler import solve
+>>> cc = compile_cell_detailed(load_example("supersigma"))
+>>> plan = solve(cc.problem, "greedy", seed=0).schedule
+>>> result = simulate(cc, plan)
+>>> set(result.tasks_frame()["status"])
+{'done'}
+>>> result.metrics.executed_makespan >= plan.makespan  # geometric stops (S2.12) cost time
+True
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from multiarm.errors import InternalError, UsageError, ValidationError
+from multiarm.types import FloatArray
+from scheduler import Problem, Schedule, validate
+from workcell.arms.profiles import StepperDrive
+from workcell.cell import Cell
+from workcell.compile import CompiledCell, compile_cell_detailed, compile_details
+from workcell.sim.controller import ArmController, Ticker
+from workcell.sim.coordinator import FAR, Coordinator, Network
+from workcell.sim.faults import (
+    ActivateZones,
+    ArmFailure,
+    Crash,
+    EmergencyStop,
+    Fault,
+    FaultPlan,
+    LatePart,
+    LostSync,
+    MessageLoss,
+    as_plan,
+)
+from workcell.sim.kernel import Kernel
+from workcell.sim.medium import FixedLatencyMedium, IdealMedium, Medium
+from workcell.sim.monitor import SafetyMonitor
+from workcell.sim.trace import Metrics, Trace
+
+__all__ = ["CONTROL_TIME", "SimResult", "check_control_bound", "simulate"]
+
+CONTROL_TIME = 1.25e-4
+"""Seconds of one CPU's time to control one arm for one sampling period
+(S2.2: an i860 ran 8 four-axis SCARA arms at 1 ms, so at most 1/8 ms each)."""
+
+MediumSpec = str | Callable[[Kernel, int], Medium]
+
+
+def check_control_bound(n_arms: int, period: float, control_time: float = CONTROL_TIME) -> int:
+    """The S2.2 centralized-control bound: ``arms <= period / control_time``.
+
+    Parameters
+    ----------
+    n_arms : int
+    period : float
+        Sampling period, seconds.
+    control_time : float
+        Per-arm control time per period, seconds.
+
+    Returns
+    -------
+    int
+        The largest number of arms one processor can control.
+
+    Raises
+    ------
+    UsageError
+        When ``n_arms`` exceeds the bound (the message gives the numbers).
+
+    Examples
+    --------
+    >>> check_control_bound(8, 1e-3)
+    8
+    >>> check_control_bound(9, 1e-3)
+    Traceback (most recent call last):
+    ...
+    multiarm.errors.UsageError: centralized control (S2.2): 9 arms exceed sampling period / per-arm control time = 0.001 s / 0.000125 s = 8 arms
+    """
+    if not (period > 0 and math.isfinite(period)):
+        raise UsageError(f"sampling period must be > 0 seconds, got {period!r}")
+    if not (control_time > 0 and math.isfinite(control_time)):
+        raise UsageError(f"per-arm control time must be > 0 seconds, got {control_time!r}")
+    bound = math.floor(period / control_time + 1e-9)
+    if n_arms > bound:
+        raise UsageError(
+            f"centralized control (S2.2): {n_arms} arms exceed sampling period / per-arm "
+            f"control time = {period:g} s / {control_time:g} s = {bound} arms"
+        )
+    return bound
+
+
+def _medium(spec: MediumSpec, kernel: Kernel, stations: int) -> Medium:
+    if callable(spec):
+        m = spec(kernel, stations)
+        if not isinstance(m, Medium):
+            raise UsageError(f"medium factory returned {m!r}, not a Medium")
+        return m
+    if not isinstance(spec, str):
+        raise UsageError(f"medium must be a name or a callable, got {spec!r}")
+    try:
+        from workcell.sim import network
+
+        make = getattr(network, "make_medium", None)
+    except ImportError:  # pragma: no cover - the package ships network/
+        make = None
+    if make is not None:
+        out: Medium = make(spec, kernel, stations)
+        return out
+    if spec == "ideal":
+        return IdealMedium(kernel, stations)
+    if spec == "fixed":
+        return FixedLatencyMedium(kernel, stations, 1e-3)
+    raise UsageError(f"unknown medium {spec!r} (known: ideal, fixed)")
+
+
+class SimResult:
+    """What :func:`simulate` returns.
+
+    Attributes
+    ----------
+    problem : scheduler.Problem
+    schedule : scheduler.Schedule
+        The plan given.
+    plan : scheduler.Schedule
+        The last plan the coordinator followed (after any re-solve).
+    executed : scheduler.Schedule or None
+        What ran, when every task completed (else None).
+    seed : int
+    trace : Trace
+    metrics : Metrics
+    """
+
+    def __init__(
+        self,
+        problem: Problem,
+        schedule: Schedule,
+        plan: Schedule,
+        executed: Schedule | None,
+        seed: int,
+        trace: Trace,
+        metrics: Metrics,
+        tasks: list[dict[str, Any]],
+        reservations: list[dict[str, Any]],
+    ) -> None:
+        self.problem = problem
+        self.schedule = schedule
+        self.plan = plan
+        self.executed = executed
+        self.seed = seed
+        self.trace = trace
+        self.metrics = metrics
+        self._tasks = tasks
+        self._reservations = reservations
+        self._arms: list[ArmController] = []
+
+    def joints(self, times: Sequence[float] | FloatArray) -> dict[str, FloatArray]:
+        """Each arm's actual joints at ``times`` (seconds) as run: arm name ->
+        (N, dof) float (for rendering the cell at chosen instants)."""
+        t = np.asarray(times, dtype=float).reshape(-1)
+        return {c.name: SafetyMonitor.joints(c, t) for c in self._arms}
+
+    def tasks_frame(self) -> Any:
+        """One row per task: task, arm, mode, planned_start, planned_end,
+        start, end, status ("done" | "failed"), cause."""
+        import pandas as pd
+
+        cols = [
+            "task",
+            "arm",
+            "mode",
+            "planned_start",
+            "planned_end",
+            "start",
+            "end",
+            "status",
+            "cause",
+        ]
+        return pd.DataFrame(self._tasks, columns=cols)
+
+    def reservations_frame(self) -> Any:
+        """Executed resource use: kind ("zone" | "move" | "tool"), resource,
+        arm, task, start, end."""
+        import pandas as pd
+
+        return pd.DataFrame(
+            self._reservations, columns=["kind", "resource", "task", "arm", "start", "end"]
+        )
+
+    def save(self, directory: str | PathLike[str]) -> Path:
+        """Write trace.json, metrics.json and tasks.csv into ``directory`` (created)."""
+        d = Path(directory)
+        d.mkdir(parents=True, exist_ok=True)
+        self.trace.to_json(d / "trace.json")
+        self.metrics.to_json(d / "metrics.json")
+        self.tasks_frame().to_csv(d / "tasks.csv", index=False)
+        return d
+
+    def __repr__(self) -> str:
+        m = self.metrics
+        return (
+            f"SimResult({self.problem.name!r}: planned {m.planned_makespan:.6g} s, executed "
+            f"{m.executed_makespan:.6g} s, {m.done_tasks} done, {m.failed_tasks} failed)"
+        )
+
+
+def _compiled(cell: Cell | CompiledCell | Problem) -> CompiledCell:
+    if isinstance(cell, CompiledCell):
+        return cell
+    if isinstance(cell, Cell):
+        return compile_cell_detailed(cell)
+    if isinstance(cell, Problem):
+        return compile_details(cell)
+    raise UsageError(f"simulate: cell must be a Cell or a CompiledCell, got {type(cell).__name__}")
+
+
+def _check_faults(plan: FaultPlan, cc: CompiledCell) -> None:
+    p = cc.problem
+    arms = p.arm_names
+    parts = set(cc.cell.taskset.expected_arrivals()) | {x.id for x in cc.cell.taskset.parts}
+    sdl = set(cc.cell.zone_map.zone_names())  # the arm-pair zones are never activated
+    for i, f in enumerate(plan):
+        where = f"faults[{i}] ({f.kind})"
+        if isinstance(f, ArmFailure | Crash | LostSync) and f.arm not in arms:
+            raise ValidationError(f"{where}.arm: unknown arm {f.arm!r} (arms: {', '.join(arms)})")
+        if isinstance(f, LostSync):
+            arm = cc.cell.arm(f.arm)
+            if f.axis >= arm.dof:
+                raise ValidationError(
+                    f"{where}.axis: arm {f.arm!r} has {arm.dof} axes, no axis {f.axis}"
+                )
+            if not isinstance(arm.drives[f.axis], StepperDrive):
+                raise ValidationError(
+                    f"{where}.axis: axis {f.axis} of arm {f.arm!r} is a servo joint; only "
+                    "stepper axes lose synchronism (S1.6)"
+                )
+        if isinstance(f, LatePart) and f.part not in parts:
+            raise ValidationError(
+                f"{where}.part: unknown part {f.part!r} (parts: {', '.join(sorted(parts))})"
+            )
+        if isinstance(f, ActivateZones):
+            for z in f.zones:
+                if z not in sdl:
+                    raise ValidationError(
+                        f"{where}.zones: unknown zone {z!r} (zones of the cell's zone map: "
+                        f"{', '.join(sorted(sdl))})"
+                    )
+    if sum(isinstance(f, MessageLoss) for f in plan) > 1:
+        raise ValidationError("faults: at most one message_loss record")
+
+
+def simulate(
+    cell: Cell | CompiledCell,
+    schedule: Schedule,
+    seed: int = 0,
+    faults: FaultPlan | Sequence[Fault] | Sequence[Mapping[str, Any]] | None = None,
+    medium: MediumSpec = "ideal",
+    *,
+    resolve: bool = True,
+    resolve_budget: float = 0.015,
+    resolve_evaluations: int | None = None,
+    tick: float | None = None,
+    monitor: bool = True,
+    monitor_period: float = 0.02,
+    control_time: float = CONTROL_TIME,
+    _zone_checks: bool = True,
+    _geometry: bool = True,
+) -> SimResult:
+    """Execute ``schedule`` in the simulated cell (S2.3-S2.7, S2.12).
+
+    Parameters
+    ----------
+    cell : Cell or CompiledCell
+        A Cell is compiled first (:func:`workcell.compile_cell_detailed`).
+    schedule : scheduler.Schedule
+        A schedule of the cell's problem (checked with :func:`scheduler.validate`).
+    seed : int
+        Seeds every random draw (message loss); the same seed gives the same
+        trace bit for bit.
+    faults : FaultPlan, list of fault records or of dicts, optional
+    medium : str or callable
+        A medium name (``"ideal"``, ``"fixed"`` and the names of
+        :mod:`workcell.sim.network`) or ``factory(kernel, stations) -> Medium``.
+        Station 0 is the coordinator, station ``i`` the ``i``-th arm.
+    resolve : bool
+        Re-solve (:func:`scheduler.reschedule`) when an arm fails, a part
+        comes late or a detour costs more than planned. ``False`` keeps the
+        plan: the following tasks wait, a failed arm's tasks are reported
+        failed (for comparing runs with and without re-solving).
+    resolve_budget : float
+        Real-time budget of one re-solve, seconds (latency measured and
+        reported against it; decisions never depend on wall time).
+    resolve_evaluations : int, optional
+        Work limit of one re-solve (schedules decoded by the local search);
+        default ``max(5, 2000 // tasks)`` (decoding one schedule of 200
+        tasks took a few milliseconds on the development machine; the
+        latency is measured against ``resolve_budget``, not bounded by it).
+    tick : float, optional
+        Sampling period (seconds) to model every controller tick (S2.3);
+        ``None``: event level (idle ticks skipped; the pipeline offset is then
+        computed for a 1 ms period).
+    monitor : bool
+        Run the independent safety monitor (raises
+        :class:`~workcell.sim.monitor.SafetyViolation`).
+    monitor_period : float
+        Seconds between the monitor's collision samples.
+    control_time : float
+        Per-arm control time per sampling period (S2.2 bound, checked when
+        ``tick`` is given).
+
+    Returns
+    -------
+    SimResult
+
+    Raises
+    ------
+    UsageError
+        Bad arguments (named), or too many arms for centralized control at
+        ``tick`` (S2.2).
+    ValidationError
+        Bad fault records (index and field named).
+    ScheduleError
+        A schedule that violates the problem.
+    SafetyViolation
+        The monitor saw a collision or a broken zone invariant.
+    """
+    wall0 = time.perf_counter()
+    cc = _compiled(cell)
+    p = cc.problem
+    if not isinstance(schedule, Schedule):
+        raise UsageError(
+            f"simulate: schedule must be a scheduler.Schedule, got {type(schedule).__name__}"
+        )
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise UsageError(f"simulate: seed must be an integer >= 0, got {seed!r}")
+    if not isinstance(resolve, bool):
+        raise UsageError(f"simulate: resolve must be True or False, got {resolve!r}")
+    for name, value in (("resolve_budget", resolve_budget), ("monitor_period", monitor_period)):
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not (value > 0 and math.isfinite(value))
+        ):
+            raise UsageError(f"simulate: {name} must be a number > 0 (seconds), got {value!r}")
+    if resolve_evaluations is None:
+        resolve_evaluations = max(5, 2000 // max(1, p.n_tasks))
+    if (
+        isinstance(resolve_evaluations, bool)
+        or not isinstance(resolve_evaluations, int)
+        or (resolve_evaluations < 1)
+    ):
+        raise UsageError(
+            f"simulate: resolve_evaluations must be an integer >= 1, got {resolve_evaluations!r}"
+        )
+    if tick is not None:
+        if (
+            isinstance(tick, bool)
+            or not isinstance(tick, int | float)
+            or not (tick > 0 and math.isfinite(tick))
+        ):
+            raise UsageError(f"simulate: tick must be None or a period > 0 seconds, got {tick!r}")
+        check_control_bound(p.n_arms, float(tick), control_time)
+    if len(schedule.mode) != p.n_tasks:
+        raise UsageError(
+            f"simulate: the schedule covers {len(schedule.mode)} tasks, cell {p.name!r} has "
+            f"{p.n_tasks}"
+        )
+    if _zone_checks:
+        validate(p, schedule)
+    fplan = as_plan(faults)
+    _check_faults(fplan, cc)
+    seed = int(seed)
+
+    kernel = Kernel()
+    trace = Trace()
+    A = p.n_arms
+    med = _medium(medium, kernel, A + 1)
+    loss = next((f for f in fplan if isinstance(f, MessageLoss)), None)
+    rng = np.random.default_rng(seed)
+    names = ["coordinator", *p.arm_names]
+    net = Network(kernel, med, trace, names, loss, rng)
+    period = float(tick) if tick is not None else 1e-3
+    ticker = Ticker(kernel, period) if tick is not None else None
+    arms: list[ArmController] = []
+    for a, (arm, q0) in enumerate(zip(cc.cell.arms, cc.cell.start, strict=True)):
+        ctl = ArmController(kernel, a, arm, q0, net.send, trace, period, ticker)
+        ctl.task_names = p.task_names
+        ctl.zone_names = p.zone_names
+        ctl.tool_names = p.tool_names
+        arms.append(ctl)
+
+        def rx(frame: Any, ctl: ArmController = ctl) -> None:
+            ctl.receive(frame.kind, frame.payload[0])
+
+        net.receivers[a + 1] = rx
+    if ticker is not None:
+        ticker.arms = arms
+    coord = Coordinator(
+        cc,
+        schedule,
+        kernel,
+        net,
+        trace,
+        arms,
+        seed=seed,
+        resolve_budget=resolve_budget,
+        resolve_evaluations=resolve_evaluations,
+        zone_checks=_zone_checks,
+        geometry=_geometry,
+        resolving=resolve,
+    )
+    arm_index = {n: i for i, n in enumerate(p.arm_names)}
+    arrivals = cc.cell.taskset.expected_arrivals()
+    for f in fplan:
+        if isinstance(f, ArmFailure):
+            kernel.schedule(f.at, coord.arm_failed, arm_index[f.arm], absolute=True)
+        elif isinstance(f, Crash):
+            kernel.schedule(f.at, _crash, coord, arm_index[f.arm], f.recovery, absolute=True)
+        elif isinstance(f, LostSync):
+            kernel.schedule(
+                f.at, _lost_sync, coord, arm_index[f.arm], f.axis, f.steps, absolute=True
+            )
+        elif isinstance(f, EmergencyStop):
+            kernel.schedule(f.at, coord.emergency_stop, f.duration, absolute=True)
+        elif isinstance(f, ActivateZones):
+            kernel.schedule(f.at, coord.activate, f.zones, absolute=True)
+        elif isinstance(f, LatePart):
+            expected = float(arrivals.get(f.part, 0.0))
+            tasks = [
+                t
+                for t, task in enumerate(cc.cell.taskset.tasks)
+                if f.part in cc.cell.taskset.gating_parts(task.id)
+            ]
+            kernel.schedule(
+                expected, coord.part_late, tasks, expected + f.delay, f.part, absolute=True
+            )
+    coord.start()
+    horizon = (
+        10.0 * max(schedule.makespan, 1.0)
+        + 1e4
+        + sum(f.duration for f in fplan if isinstance(f, EmergencyStop))
+        + sum(f.delay for f in fplan if isinstance(f, LatePart) and math.isfinite(f.delay))
+    )
+    kernel.run(until=None if False else horizon)
+    if kernel.peek() < math.inf and kernel.peek() <= horizon:  # pragma: no cover
+        raise InternalError("simulate: events left after the run")
+    t_end = max((max((r[1] for r in c.motion), default=0.0) for c in arms), default=0.0)
+    for c in arms:
+        c.finish()
+    return _result(
+        cc,
+        schedule,
+        coord,
+        arms,
+        trace,
+        kernel,
+        net,
+        ticker,
+        seed,
+        monitor,
+        monitor_period,
+        wall0,
+        t_end,
+    )
+
+
+def _crash(coord: Coordinator, a: int, recovery: float) -> None:
+    arm = coord.arms[a]
+    hit = arm.crash(recovery)
+    coord.trace.add(
+        coord.kernel.now,
+        "fault",
+        arm=arm.name,
+        delay=recovery if hit else 0.0,
+        detail="crash: reflex-arc stop (S1.2)" if hit else "crash while standing: no effect",
+    )
+
+
+def _lost_sync(coord: Coordinator, a: int, axis: int, steps: int) -> None:
+    arm = coord.arms[a]
+    err = arm.lose_sync(axis, steps)
+    coord.trace.add(
+        coord.kernel.now,
+        "fault",
+        arm=arm.name,
+        detail=f"axis {axis} lost {steps} steps ({err * 1e3:.4g} mm): tracked position wrong "
+        "until homed (S1.6)",
+    )
+
+
+def _result(
+    cc: CompiledCell,
+    schedule: Schedule,
+    coord: Coordinator,
+    arms: list[ArmController],
+    trace: Trace,
+    kernel: Kernel,
+    net: Network,
+    ticker: Ticker | None,
+    seed: int,
+    monitor: bool,
+    monitor_period: float,
+    wall0: float,
+    t_end: float,
+) -> SimResult:
+    p = cc.problem
+    T = p.n_tasks
+    logs: dict[int, tuple[int, list[Any]]] = {}
+    for c in arms:
+        for t, log in c.task_log.items():
+            if coord.status[t] == "done" and math.isfinite(log[1]):
+                logs[t] = (c.index, log)
+    trace.sort()
+    tasks: list[dict[str, Any]] = []
+    plan = coord.plan
+    for t in range(T):
+        m_plan = int(schedule.mode[t])
+        row: dict[str, Any] = {
+            "task": p.task_names[t],
+            "planned_start": float(schedule.start[t]),
+            "planned_end": float(schedule.end[t]),
+        }
+        if t in logs:
+            a, log = logs[t]
+            row.update(
+                arm=p.arm_names[a],
+                mode=int(log[3]),
+                start=float(log[0]),
+                end=float(log[1]),
+                status="done",
+                cause="",
+            )
+        else:
+            m = int(plan.mode[t])
+            a = int(p.mode_arm[m])
+            row.update(arm=p.arm_names[a], mode=m, start=math.nan, end=math.nan, status="failed")
+            row["cause"] = _cause(coord, t)
+            trace.add(
+                kernel.now,
+                "task_failed",
+                arm=p.arm_names[a],
+                task=p.task_names[t],
+                detail=row["cause"],
+            )
+        del m_plan
+        tasks.append(row)
+    # executed schedule
+    executed: Schedule | None = None
+    if len(logs) == T:
+        modes = np.array([int(logs[t][1][3]) for t in range(T)], dtype=np.int64)
+        starts = np.array([float(logs[t][1][0]) for t in range(T)])
+        ends = np.array([float(logs[t][1][1]) for t in range(T)])
+        waits = []
+        blocking = np.zeros(T)
+        for t in range(T):
+            w = np.zeros(len(p.shapes[int(modes[t])].borders))
+            for j, x in logs[t][1][2]:
+                w[j] += x
+            waits.append(w)
+            blocking[t] = max(0.0, ends[t] - starts[t] - p.shapes[int(modes[t])].length(w))
+        executed = Schedule(modes, starts, ends, tuple(waits), blocking)
+    # reservations executed
+    res: list[dict[str, Any]] = []
+    open_: dict[tuple[str, str, str, str], float] = {}
+    for e in trace:
+        if e.kind == "zone_enter":
+            kind = {"zone": "zone", "move": "move", "tool": "tool"}[e.detail]
+            open_[(kind, e.zone, e.task, e.arm)] = e.time
+        elif e.kind == "zone_leave":
+            kind = {"zone": "zone", "move": "move", "tool": "tool"}[e.detail]
+            s = open_.pop((kind, e.zone, e.task, e.arm), None)
+            if s is not None:
+                res.append(
+                    {
+                        "kind": kind,
+                        "resource": e.zone,
+                        "task": e.task,
+                        "arm": e.arm,
+                        "start": s,
+                        "end": e.time,
+                    }
+                )
+    done_ends = [float(logs[t][1][1]) for t in logs]
+    executed_mk = max(done_ends) if done_ends else math.nan
+    # busy: time on a leg (travelling, working, or stopped on the way),
+    # counted within [0, executed makespan] only, so a share in [0, 1]
+    span = executed_mk if done_ends else 0.0
+    busy = {n: 0.0 for n in p.arm_names}
+    for c in arms:
+        busy[c.name] = sum(
+            max(0.0, min(r[1], span) - max(r[0], 0.0)) for r in c.motion if r[2] is not None
+        )
+    metrics = Metrics(
+        planned_makespan=float(schedule.makespan),
+        executed_makespan=executed_mk,
+        utilisation={n: (v / span if span > 0 else 0.0) for n, v in busy.items()},
+        zone_wait=_merge([c.zone_wait for c in arms]),
+        sleeps=sum(1 for e in trace if e.kind == "sleep"),
+        wakes=sum(1 for e in trace if e.kind == "wake"),
+        detours=coord.detours,
+        resolves=coord.resolves,
+        resolve_latency=np.array(coord.resolve_latency, dtype=float),
+        resolve_budget=coord.resolve_budget,
+        message_delay=np.array(net.delays, dtype=float),
+        messages=net.sent,
+        retransmissions=net.retransmissions,
+        failed_tasks=sum(1 for r in tasks if r["status"] == "failed"),
+        done_tasks=sum(1 for r in tasks if r["status"] == "done"),
+        ticks=ticker.ticks if ticker is not None else 0,
+        events=kernel.events_run,
+    )
+    if monitor:
+        SafetyMonitor(cc, monitor_period).check(arms, max(t_end, 0.0), trace)
+    metrics.wall_seconds = time.perf_counter() - wall0
+    out = SimResult(p, schedule, plan, executed, seed, trace, metrics, tasks, res)
+    out._arms = arms
+    return out
+
+
+def _merge(dicts: list[dict[str, float]]) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for d in dicts:
+        for k, v in d.items():
+            out[k] = out.get(k, 0.0) + v
+    return dict(sorted(out.items()))
+
+
+def _cause(coord: Coordinator, t: int) -> str:
+    p = coord.p
+    if coord.cause[t]:
+        return coord.cause[t]
+    # the predecessors not done (a done task's predecessors are all done)
+    seen: set[int] = set()
+    stack = [t]
+    while stack:
+        x = stack.pop()
+        for q in p.task_preds[x]:
+            if q in seen or coord.status[q] == "done":
+                continue
+            seen.add(q)
+            if coord.cause[q]:
+                return f"predecessor {p.task_names[q]!r} failed: {coord.cause[q]}"
+            stack.append(q)
+
+    def no_arm(x: int) -> bool:
+        return all(int(p.mode_arm[m]) in coord.failed_arms for m in p.task_modes[x])
+
+    if no_arm(t):
+        return "no working arm can do it (every capable arm failed)"
+    for q in sorted(seen):
+        if no_arm(q):
+            return f"predecessor {p.task_names[q]!r} cannot run: every arm able to do it failed"
+    for q in sorted(seen):
+        b = int(p.mode_arm[int(coord.plan.mode[q])])
+        if b in coord.failed_arms:
+            return (
+                f"predecessor {p.task_names[q]!r} cannot run: its arm {p.arm_names[b]!r} failed"
+                + ("" if coord.resolving else " (re-solving off)")
+            )
+    a = int(p.mode_arm[int(coord.plan.mode[t])])
+    if a in coord.failed_arms:
+        if not coord.resolving:
+            return f"arm {p.arm_names[a]!r} failed (re-solving off: its tasks are not reassigned)"
+        return f"arm {p.arm_names[a]!r} failed and no working arm could take the task"
+    if float(coord.plan.start[t]) >= FAR:
+        return "planned after a task that cannot run"
+    held = {
+        c.name: [p.arm_names[b] for b in coord.geo_held.get(c.index, [])]
+        for c in coord.arms
+        if "geometry" in c.stops
+    }
+    if held:
+        who = "; ".join(f"{x!r} stopped by {', '.join(map(repr, ys))}" for x, ys in held.items())
+        return f"not completed: unresolved geometric deadlock (S2.6): {who}"
+    return "not completed when the simulation ended"
