@@ -252,8 +252,9 @@ class ArmController:
     trace : Trace
     period : float
         Sampling period, seconds (for the pipeline offset).
-    on_task_start, on_task_end : callable
-        Called ``(arm_index, task, time)`` (executed-schedule bookkeeping).
+    ticker : Ticker, optional
+        The shared tick driver when every controller tick is modelled
+        (``simulate(..., tick=...)``); ``None`` at event level.
     """
 
     def __init__(

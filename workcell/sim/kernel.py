@@ -69,13 +69,10 @@ class Handle(list[Any]):
     (no Python ``__init__`` per schedule); the heap holds ``(time, priority,
     seq, handle)`` tuples, compared in C, ``seq`` unique.
 
-    Parameters
-    ----------
-    iterable : tuple
-        ``(time, priority, seq, callback, args, False)``: virtual time
-        (seconds), priority (lower runs first among callbacks at the same
-        time), tie-break counter (the order of scheduling), the function and
-        its positional arguments.
+    It is built from ``(time, priority, seq, callback, args, False)``:
+    virtual time (seconds), priority (lower runs first among callbacks at the
+    same time), tie-break counter (the order of scheduling), the function and
+    its positional arguments.
     """
 
     __slots__ = ()
