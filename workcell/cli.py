@@ -152,7 +152,10 @@ def _demo_cell(cell: Any, args: argparse.Namespace, out: Path) -> tuple[dict[str
     print("per zone:")
     zone_rows = []
     reservations = sched.reservations(p)
+    grid = [name for name in p.zone_names if name.startswith("grid_")]
     for z, name in enumerate(p.zone_names):
+        if name.startswith("grid_"):
+            continue
         exclusive = bool(p.zone_exclusive[z])
         kind = "zone" if exclusive else "move"
         res = [r for r in reservations if r.kind == kind and r.resource == name]
@@ -163,6 +166,16 @@ def _demo_cell(cell: Any, args: argparse.Namespace, out: Path) -> tuple[dict[str
                 "policy": "exclusive" if exclusive else "shared",
                 "uses": len(res),
                 "occupied or moved in (s)": f"{held:.1f}",
+            }
+        )
+    if grid:  # the compile's space-grid blocks (workcell.geometry.reach), summed
+        res = [r for r in reservations if r.kind == "zone" and r.resource.startswith("grid_")]
+        zone_rows.append(
+            {
+                "zone": f"space grid ({len(grid)} blocks)",
+                "policy": "exclusive",
+                "uses": len(res),
+                "occupied or moved in (s)": f"{sum(r.end - r.start for r in res):.1f}",
             }
         )
     _print_table(zone_rows, ["zone", "policy", "uses", "occupied or moved in (s)"])
