@@ -585,7 +585,7 @@ def _sim_rows(problem: Any, schedule: Any, result: Any) -> list[dict[str, Any]]:
         {
             "metric": "zone waits (s)",
             "planned": f"{schedule.total_wait():.2f}",
-            "executed": f"{sum(waits.values()):.2f}",
+            "executed": f"{m.border_wait:.2f}",
         }
     )
     for z, w in sorted(waits.items(), key=lambda kv: -kv[1])[:3]:

@@ -308,6 +308,7 @@ class ArmController:
         self.task_log: dict[int, list[Any]] = {}
         self.points_checked = 0
         self.zone_wait: dict[str, float] = {}
+        self.border_wait = 0.0
         self._chunk: FloatArray = np.zeros((0, arm.dof))
         self._chunk_i = 0
         self._pipe_i = 0
@@ -521,6 +522,8 @@ class ArmController:
             log = self.task_log.get(leg.task)
             if log is not None:
                 log[2].append((st.border, waited))
+        if st.acquire and waited > 0:
+            self.border_wait += waited  # once per stop, however many resources it waited for
         for piece in st.acquire:
             self._zone_event("zone_enter", piece, leg.task)
             if waited > 0:

@@ -613,6 +613,7 @@ def _result(
         executed_makespan=executed_mk,
         utilisation={n: (v / span if span > 0 else 0.0) for n, v in busy.items()},
         zone_wait=_merge([c.zone_wait for c in arms]),
+        border_wait=float(sum(c.border_wait for c in arms)),
         sleeps=sum(1 for e in trace if e.kind == "sleep"),
         wakes=sum(1 for e in trace if e.kind == "wake"),
         detours=coord.detours,

@@ -225,7 +225,13 @@ class Metrics:
         task, working on it, or stopped on the way: at a border, by an
         alarm); 0 when no task completed.
     zone_wait : dict of str to float
-        Per zone (and tool), seconds arms spent stopped waiting for it.
+        Per zone (and tool), seconds arms spent stopped at a border where
+        they entered it (a stop at a border where several zones are entered
+        counts for each of them).
+    border_wait : float
+        Seconds arms spent stopped at zone borders in all, each stop once:
+        comparable with the schedule's planned waits
+        (:meth:`scheduler.Schedule.total_wait`).
     sleeps, wakes, detours, resolves : int
     resolve_latency : (n,) float
         Wall-clock seconds of each re-solve.
@@ -250,6 +256,7 @@ class Metrics:
     executed_makespan: float = math.nan
     utilisation: dict[str, float] = field(default_factory=dict)
     zone_wait: dict[str, float] = field(default_factory=dict)
+    border_wait: float = 0.0
     sleeps: int = 0
     wakes: int = 0
     detours: int = 0
@@ -280,7 +287,7 @@ class Metrics:
             "mean_utilisation": (
                 float(np.mean(list(self.utilisation.values()))) if self.utilisation else math.nan
             ),
-            "zone_wait": float(sum(self.zone_wait.values())),
+            "zone_wait": float(self.border_wait),
             "sleeps": self.sleeps,
             "wakes": self.wakes,
             "detours": self.detours,
