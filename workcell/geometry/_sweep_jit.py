@@ -40,6 +40,29 @@ def _slab_axis(p: float, d: float, h: float, lo: float, hi: float) -> tuple[floa
     return max(lo, a), min(hi, b)
 
 
+@njit(cache=True, inline="always")
+def _to_local(
+    ax: float,
+    ay: float,
+    az: float,
+    dx: float,
+    dy: float,
+    dz: float,
+    rot: np.ndarray,
+    c: np.ndarray,
+    lp: np.ndarray,
+    ld: np.ndarray,
+) -> None:
+    """Segment start ``a`` and direction ``d`` in a solid's frame (rotation
+    ``rot`` local -> world, centre ``c``): ``lp = (a - c) R``, ``ld = d R``,
+    written into ``lp`` and ``ld``."""
+    for j in range(3):
+        lp[j] = (ax * rot[0, j] + ay * rot[1, j] + az * rot[2, j]) - (
+            c[0] * rot[0, j] + c[1] * rot[1, j] + c[2] * rot[2, j]
+        )
+        ld[j] = dx * rot[0, j] + dy * rot[1, j] + dz * rot[2, j]
+
+
 @njit(cache=True)
 def contacts_block(
     p0: np.ndarray,
@@ -113,13 +136,7 @@ def contacts_block(
                 fx, fy, fz = mx - box_c[k, 0], my - box_c[k, 1], mz - box_c[k, 2]
                 if math.sqrt(fx * fx + fy * fy + fz * fz) > box_big[k] + grow:
                     continue
-                for j in range(3):
-                    lp[j] = (ax * box_r[k, 0, j] + ay * box_r[k, 1, j] + az * box_r[k, 2, j]) - (
-                        box_c[k, 0] * box_r[k, 0, j]
-                        + box_c[k, 1] * box_r[k, 1, j]
-                        + box_c[k, 2] * box_r[k, 2, j]
-                    )
-                    ld[j] = dx * box_r[k, 0, j] + dy * box_r[k, 1, j] + dz * box_r[k, 2, j]
+                _to_local(ax, ay, az, dx, dy, dz, box_r[k], box_c[k], lp, ld)
                 lo, hi = -math.inf, math.inf
                 for j in range(3):
                     lo, hi = _slab_axis(lp[j], ld[j], box_h[k, j] + r, lo, hi)
@@ -132,13 +149,7 @@ def contacts_block(
                 fx, fy, fz = mx - cyl_c[k, 0], my - cyl_c[k, 1], mz - cyl_c[k, 2]
                 if math.sqrt(fx * fx + fy * fy + fz * fz) > cyl_big[k] + grow:
                     continue
-                for j in range(3):
-                    lp[j] = (ax * cyl_r[k, 0, j] + ay * cyl_r[k, 1, j] + az * cyl_r[k, 2, j]) - (
-                        cyl_c[k, 0] * cyl_r[k, 0, j]
-                        + cyl_c[k, 1] * cyl_r[k, 1, j]
-                        + cyl_c[k, 2] * cyl_r[k, 2, j]
-                    )
-                    ld[j] = dx * cyl_r[k, 0, j] + dy * cyl_r[k, 1, j] + dz * cyl_r[k, 2, j]
+                _to_local(ax, ay, az, dx, dy, dz, cyl_r[k], cyl_c[k], lp, ld)
                 lo, hi = _slab_axis(lp[2], ld[2], cyl_h[k] + r, -math.inf, math.inf)
                 lo, hi = max(lo, 0.0), min(hi, 1.0)
                 if lo > hi:
