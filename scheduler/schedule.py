@@ -24,6 +24,7 @@ multiarm.errors.ScheduleError: task 't1' starts at 1 before its predecessor 't0'
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -45,6 +46,10 @@ __all__ = [
     "blocking_required",
     "validate",
 ]
+
+
+ReservationRow = tuple[Literal["zone", "move", "tool", "start"], str, str | None, str, float, float]
+"""A :class:`Reservation` as a plain tuple (kind, resource, task, arm, start, end)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -220,10 +225,32 @@ class Schedule:
         problem : Problem
         seqs : list of list of int or None
             :meth:`sequences`, when already computed.
+
+        Returns
+        -------
+        list of Reservation
+        """
+        return [Reservation(*row) for row in self.reservation_rows(problem, seqs)]
+
+    def reservation_rows(
+        self, problem: Problem, seqs: list[list[int]] | None = None
+    ) -> list[ReservationRow]:
+        """:meth:`reservations` as plain tuples ``(kind, resource, task, arm,
+        start, end)``, cheaper where thousands are checked (the validator).
+
+        Parameters
+        ----------
+        problem : Problem
+        seqs : list of list of int or None
+
+        Returns
+        -------
+        list of tuple
         """
         shapes = problem.shapes
         Z = problem.n_zones
-        out: list[Reservation] = []
+        zone_names, tool_names = problem.zone_names, problem.tool_names
+        out: list[ReservationRow] = []
         arms = self.arms(problem).tolist()
         mode, start = self.mode.tolist(), self.start.tolist()
         for t in range(self.n_tasks):
@@ -234,12 +261,12 @@ class Schedule:
             task = problem.task_names[t]
             for r, s, e in sh.intervals(start[t], self.waits[t]):
                 kind: Literal["zone", "move"] = "zone" if r < Z else "move"
-                out.append(Reservation(kind, problem.zone_names[r % Z], task, arm, s, e))
+                out.append((kind, zone_names[r % Z], task, arm, s, e))
             for r in sh.tools:
                 out.append(
-                    Reservation(
+                    (
                         "tool",
-                        problem.tool_names[r - 2 * Z],
+                        tool_names[r - 2 * Z],
                         task,
                         arm,
                         start[t],
@@ -253,11 +280,7 @@ class Schedule:
         ):
             for z in z_list:
                 if problem.zone_exclusive[z]:
-                    out.append(
-                        Reservation(
-                            "start", problem.zone_names[z], None, problem.arm_names[a], 0.0, dep
-                        )
-                    )
+                    out.append(("start", zone_names[z], None, problem.arm_names[a], 0.0, dep))
         return out
 
     def departures(self, problem: Problem, seqs: list[list[int]] | None = None) -> list[float]:
@@ -459,22 +482,51 @@ def _fmt(x: float) -> str:
     return f"{x:.6g}"
 
 
-def parked_pose(
-    problem: Problem, schedule: Schedule, seqs: list[list[int]], arm: int, time: float
-) -> int | None:
-    """Where ``arm`` stands parked at ``time``: the task whose end pose it holds
-    (-1: its initial pose), or None when it is working or travelling."""
+def park_table(
+    problem: Problem, schedule: Schedule, seqs: list[list[int]], arm: int
+) -> tuple[list[int], list[float], list[float], list[float]]:
+    """What :func:`parked_pose` reads of one arm: its tasks in start order,
+    when it leaves for each (start minus the travel), when each ends, and the
+    running maximum of those ends."""
     prev = -1
-    ready = 0.0
+    departs: list[float] = []
+    ends: list[float] = []
+    reach: list[float] = []
     for t in seqs[arm]:
         depart = float(schedule.start[t]) - problem.setup_time(arm, prev, t)
-        if time < depart:
-            return prev if time >= ready else None
-        if time < float(schedule.end[t]):
-            return None
+        departs.append(depart)
+        ends.append(float(schedule.end[t]))
+        reach.append(max(reach[-1], ends[-1]) if reach else ends[-1])
         prev = t
-        ready = float(schedule.end[t])
-    return prev
+    return seqs[arm], departs, ends, reach
+
+
+def parked_pose(
+    problem: Problem,
+    schedule: Schedule,
+    seqs: list[list[int]],
+    arm: int,
+    time: float,
+    table: tuple[list[int], list[float], list[float], list[float]] | None = None,
+) -> int | None:
+    """Where ``arm`` stands parked at ``time``: the task whose end pose it holds
+    (-1: its initial pose), or None when it is working or travelling.
+
+    ``table`` is :func:`park_table` of the arm, when already computed. Walking
+    the arm's tasks in order, the first one that ends after ``time`` decides
+    (a task never ends before it departs); found by bisection on the running
+    maximum of the ends.
+    """
+    tasks, departs, ends, reach = (
+        park_table(problem, schedule, seqs, arm) if table is None else table
+    )
+    i = bisect.bisect_right(reach, time)
+    prev = tasks[i - 1] if i > 0 else -1
+    if i == len(tasks):
+        return prev
+    if time < departs[i]:
+        return prev if time >= (ends[i - 1] if i > 0 else 0.0) else None
+    return None
 
 
 def blocking_required(
@@ -483,9 +535,11 @@ def blocking_required(
     task: int,
     seqs: list[list[int]] | None = None,
     cache: dict[tuple[int, int, int], float] | None = None,
+    tables: list[tuple[list[int], list[float], list[float], list[float]]] | None = None,
 ) -> tuple[float, list[tuple[int, int]]]:
     """The detour cost the blocking oracle charges ``task`` in ``schedule``:
-    (total, [(parked arm, pose task), ...] that block it)."""
+    (total, [(parked arm, pose task), ...] that block it). ``tables``: every
+    arm's :func:`park_table`, when already computed."""
     oracle = problem.blocking
     if oracle is None:
         return 0.0, []
@@ -499,7 +553,7 @@ def blocking_required(
     for b in range(problem.n_arms):
         if b == a:
             continue
-        pose = parked_pose(problem, schedule, seqs, b, S)
+        pose = parked_pose(problem, schedule, seqs, b, S, None if tables is None else tables[b])
         if pose is None:
             continue
         key = (m, b, pose)
@@ -604,36 +658,37 @@ def validate(problem: Problem, schedule: Schedule, tol: float = 1e-6) -> float:
                 )
             prev, ready = t, end[t]
     # zones and tools
-    res = s.reservations(p, seqs)
-    groups: dict[tuple[str, str], list[Reservation]] = {}
+    res = s.reservation_rows(p, seqs)
+    groups: dict[tuple[str, str], list[ReservationRow]] = {}
     for r in res:
-        if r.kind == "move" or r.kind == "tool":
-            groups.setdefault((r.kind, r.resource), []).append(r)
+        if r[0] == "move" or r[0] == "tool":
+            groups.setdefault((r[0], r[1]), []).append(r)
         else:  # exclusive occupancy and start zones share the zone
-            groups.setdefault(("zone", r.resource), []).append(r)
+            groups.setdefault(("zone", r[1]), []).append(r)
     for (kind, name), items in groups.items():
-        items.sort(key=lambda r: r.start)
-        for i, r1 in enumerate(items):
-            for r2 in items[i + 1 :]:
-                if r2.start >= r1.end - tol:
+        items.sort(key=lambda r: r[4])
+        for i, (_k1, _n1, task1, arm1, s1, e1) in enumerate(items):
+            for _k2, _n2, task2, arm2, s2, e2 in items[i + 1 :]:
+                if s2 >= e1 - tol:
                     break
-                if r2.arm == r1.arm or r2.end <= r2.start + tol or r1.end <= r1.start + tol:
+                if arm2 == arm1 or e2 <= s2 + tol or e1 <= s1 + tol:
                     continue
                 what = {
                     "zone": "inside exclusive zone",
                     "move": "moving in shared zone",
                     "tool": "holding tool",
                 }[kind]
-                who1 = f"task {r1.task!r}" if r1.task else "standing (start zone)"
-                who2 = f"task {r2.task!r}" if r2.task else "standing (start zone)"
+                who1 = f"task {task1!r}" if task1 else "standing (start zone)"
+                who2 = f"task {task2!r}" if task2 else "standing (start zone)"
                 raise ScheduleError(
-                    f"arms {r1.arm!r} ({who1}) and {r2.arm!r} ({who2}) are both {what} {name!r} "
-                    f"during [{_fmt(r2.start)}, {_fmt(min(r1.end, r2.end))})"
+                    f"arms {arm1!r} ({who1}) and {arm2!r} ({who2}) are both {what} {name!r} "
+                    f"during [{_fmt(s2)}, {_fmt(min(e1, e2))})"
                 )
     if p.blocking is not None:
         cache: dict[tuple[int, int, int], float] = {}
+        tables = [park_table(p, s, seqs, b) for b in range(p.n_arms)]
         for t in range(T):
-            need, who = blocking_required(p, s, t, seqs, cache)
+            need, who = blocking_required(p, s, t, seqs, cache, tables)
             if math.isinf(need):
                 b, pose = next(
                     (b, pose) for b, pose in who if math.isinf(cache[(int(s.mode[t]), b, pose)])

@@ -29,7 +29,7 @@ import numpy as np
 
 from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
-from scheduler.kernel import State, compiled, decode, to_schedule
+from scheduler.kernel import State, compiled, critical_chain, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
@@ -335,14 +335,21 @@ def _move_after(
 
 
 def neighbours(
-    ev: Evaluator, sol: Solution, sched: Schedule, rng: np.random.Generator
+    ev: Evaluator, sol: Solution, rng: np.random.Generator
 ) -> list[tuple[IntArray, IntArray]]:
-    """Candidate moves around the critical path of ``sched``, shuffled
-    (frozen tasks and disallowed modes left alone)."""
+    """Candidate moves around the critical chain of ``sol`` (read from its
+    decoded state by the compiled :func:`scheduler.kernel.critical_chain`),
+    shuffled (frozen tasks and disallowed modes left alone)."""
     p = ev.problem
     frozen = ev.frozen
     allowed = ev.allowed
-    chain = critical_path(p, sched, rng)
+    st = sol.state
+    if st is None:
+        ok, st = ev.decode(sol.order, sol.modes)
+        if not ok:
+            raise InternalError("a decoded solution no longer decodes")
+        sol.state = st
+    chain = critical_chain(ev.inst, st, rng)
     pos = np.full(p.n_tasks, -1, dtype=np.int64)
     pos[sol.order] = np.arange(len(sol.order))
     moves: list[tuple[IntArray, IntArray]] = []
@@ -426,9 +433,8 @@ def local_search(
     out_of_budget = budget.spent
     while budget.room_for_iteration() and best.makespan > lower + 1e-9:
         tp = time.perf_counter()
-        sched = ev.schedule(cur)
         improved = False
-        moves = neighbours(ev, cur, sched, rng)
+        moves = neighbours(ev, cur, rng)
         budget.prep = time.perf_counter() - tp
         for order, modes in moves:
             if out_of_budget():

@@ -25,11 +25,13 @@ solvers: exclusive zone ``z`` -> ``z``, movement of shared zone ``z`` ->
 
 from __future__ import annotations
 
+import bisect
 import itertools
 from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
 
+from multiarm.errors import InternalError
 from multiarm.types import FloatArray
 
 if TYPE_CHECKING:
@@ -91,22 +93,36 @@ class ModeShape:
             return [(r, start + s, start + e) for r, s, e in self.exclusive] + [
                 (r, start + s, start + e) for r, s, e in self.moves
             ]
+        # W<=(x) and W<(x) from prefix sums of the waits (borders increase):
+        # the same additions in the same order as :meth:`shift`, in log time
+        wl = waits.tolist()
+        if len(wl) != len(self.borders):
+            raise InternalError(f"{len(wl)} waits given for {len(self.borders)} borders")
+        cw = [0.0]
+        for w in wl:
+            cw.append(cw[-1] + w)
+        borders = self.borders
         out: list[tuple[int, float, float]] = []
         for r, s, e in self.exclusive:
             out.append(
-                (r, start + s + self.shift(waits, s, True), start + e + self.shift(waits, e, False))
+                (
+                    r,
+                    start + s + cw[bisect.bisect_right(borders, s)],
+                    start + e + cw[bisect.bisect_left(borders, e)],
+                )
             )
+        if not self.moves:
+            return out
+        wait_at = dict(zip(borders, wl, strict=True))
         for r, s, e in self.moves:
-            cuts = [b for b in self.borders if s < b < e]
-            wait_at = dict(zip(self.borders, waits.tolist(), strict=True))
-            cuts = [b for b in cuts if wait_at[b] > 0]
+            cuts = [b for b in borders if s < b < e and wait_at[b] > 0]
             points = [s, *cuts, e]
             for p0, p1 in itertools.pairwise(points):
                 out.append(
                     (
                         r,
-                        start + p0 + self.shift(waits, p0, True),
-                        start + p1 + self.shift(waits, p1, False),
+                        start + p0 + cw[bisect.bisect_right(borders, p0)],
+                        start + p1 + cw[bisect.bisect_left(borders, p1)],
                     )
                 )
         return out

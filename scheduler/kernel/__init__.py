@@ -13,7 +13,9 @@ The kernel is a small package, one job per module:
   queries, arm-sequence decoding), with their Python entry points in
   :mod:`~scheduler.kernel.api`;
 * :mod:`~scheduler.kernel.build`: the :class:`~scheduler.schedule.Schedule`
-  of a complete state.
+  of a complete state;
+* :mod:`~scheduler.kernel.critical`: the critical chain of a complete state
+  (what the local search moves).
 
 ``MULTIARM_NO_JIT=1`` (or ``NUMBA_DISABLE_JIT=1``) runs the same code as
 plain Python, which ``benchmarks/bench_kernel.py`` uses to measure what the
@@ -41,6 +43,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from scheduler.kernel import critical as _critical
 from scheduler.kernel import passes as _passes
 from scheduler.kernel import place as _place
 from scheduler.kernel._jit import EPS, INF, drop_stale_cache, jit_enabled
@@ -54,8 +57,12 @@ from scheduler.kernel.api import (
 )
 from scheduler.kernel.build import to_schedule
 from scheduler.kernel.compile import Arrays, Ctx, Instance, OracleTable, Scratch, State, compiled
+from scheduler.kernel.critical import critical_chain
 
-drop_stale_cache((_passes._decode, _place._query), [Path(_place.__file__), Path(_passes.__file__)])
+drop_stale_cache(
+    (_passes._decode, _place._query, _critical._chain),
+    [Path(_place.__file__), Path(_passes.__file__), Path(_critical.__file__)],
+)
 
 __all__ = [
     "EPS",
@@ -67,6 +74,7 @@ __all__ = [
     "Scratch",
     "State",
     "compiled",
+    "critical_chain",
     "decode",
     "drop_stale_cache",
     "expand",

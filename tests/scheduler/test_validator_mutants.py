@@ -36,14 +36,14 @@ class Mutant(NamedTuple):
 
 
 _V = (sched_mod, "validate")
-_R = (sched_mod.Schedule, "reservations")
+_R = (sched_mod.Schedule, "reservation_rows")
 
 MUTANTS: list[Mutant] = [
     Mutant(
         "overlaps shorter than 1 s tolerated",
         *_V,
-        "r2.start >= r1.end - tol",
-        "r2.start >= r1.end - 1.0",
+        "s2 >= e1 - tol",
+        "s2 >= e1 - 1.0",
     ),
     Mutant("tolerance of half a second", *_V, "tol: float = 1e-6", "tol: float = 0.5"),
     Mutant(
@@ -100,7 +100,7 @@ MUTANTS: list[Mutant] = [
     Mutant(
         "a parked arm's departure ignoring its travel",
         sched_mod,
-        "parked_pose",
+        "park_table",
         "depart = float(schedule.start[t]) - problem.setup_time(arm, prev, t)",
         "depart = float(schedule.start[t])",
     ),
@@ -136,14 +136,14 @@ MUTANTS: list[Mutant] = [
         "waits inside an exclusive window not holding the zone",
         timing_mod.ModeShape,
         "intervals",
-        "start + e + self.shift(waits, e, False)",
-        "start + e",
+        "start + e + cw[bisect.bisect_left(borders, e)],",
+        "start + e + cw[bisect.bisect_left(borders, s)],",
     ),
     Mutant(
         "a waiting arm counted as moving",
         timing_mod.ModeShape,
         "intervals",
-        "cuts = [b for b in cuts if wait_at[b] > 0]",
+        "cuts = [b for b in borders if s < b < e and wait_at[b] > 0]",
         "cuts = []",
     ),
     Mutant(

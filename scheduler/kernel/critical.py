@@ -1,0 +1,226 @@
+# mypy: disallow-untyped-defs=False, disallow-incomplete-defs=False, disallow-untyped-calls=False
+"""The critical chain of a complete kernel state, compiled.
+
+The chain explains a schedule's makespan, last task first: each task could
+not start (or pass a zone border) earlier because of another one, for a
+reason
+
+* ``PRED`` -- a predecessor ended exactly at its start;
+* ``ARM`` -- the previous task on its arm ended exactly one setup before;
+* ``RESOURCE`` -- a task of another arm released a zone (exclusive, or the
+  moves of a shared zone) or a tool exactly where one of its intervals on
+  that resource starts;
+* ``RELEASE`` -- none of these: the chain starts here.
+
+It reads only the state's timelines (the intervals each task holds on each
+resource), never the problem's Python objects, so its cost does not grow
+with the number of zone windows of a mode (a compiled cell's space grid
+gives modes thousands). The local search
+(:func:`scheduler.search.neighbours`) builds its moves on it.
+
+Examples
+--------
+>>> import numpy as np
+>>> from scheduler.generate import random_problem
+>>> from scheduler.kernel import compiled, decode
+>>> p = random_problem(3, 12, 2, 1, seed=0)
+>>> inst = compiled(p)
+>>> _code, st = decode(inst, np.arange(p.n_tasks), np.full(p.n_tasks, -1))
+>>> chain = critical_chain(inst, st)
+>>> chain[0][0] == int(np.argmax(st.t_end)), chain[-1][1]
+(True, 'release')
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from multiarm.types import IntArray
+from scheduler.kernel._jit import njit
+from scheduler.kernel.compile import Instance, State
+from scheduler.kernel.place import _setup
+
+__all__ = ["ARM", "PRED", "REASONS", "RELEASE", "RESOURCE", "critical_chain", "task_reasons"]
+
+PRED, ARM, RESOURCE, RELEASE = 0, 1, 2, 3
+REASONS = ("pred", "arm", "resource", "release")
+"""Reason codes as the names :func:`critical_chain` returns."""
+
+TOL = 1e-6
+"""Two times closer than this (seconds) meet."""
+
+
+@njit(cache=True)
+def _index(st, n_res, res_lo, T):
+    """Per task, its intervals on the timelines (CSR over tasks): resource and slot."""
+    count = np.zeros(T + 1, dtype=np.int64)
+    for r in range(n_res):
+        lo = res_lo[r]
+        for k in range(st.res_n[r]):
+            x = st.tl_task[lo + k]
+            if x >= 0:
+                count[x + 1] += 1
+    for t in range(T):
+        count[t + 1] += count[t]
+    fill = count[:-1].copy()
+    own_r = np.empty(count[T], dtype=np.int64)
+    own_k = np.empty(count[T], dtype=np.int64)
+    for r in range(n_res):
+        lo = res_lo[r]
+        for k in range(st.res_n[r]):
+            x = st.tl_task[lo + k]
+            if x >= 0:
+                own_r[fill[x]] = r
+                own_k[fill[x]] = lo + k
+                fill[x] += 1
+    return count, own_r, own_k
+
+
+@njit(cache=True)
+def _prev_on_arm(st, arm_lo, n_arms, T):
+    """Per task, the task before it on its arm (-1: the first)."""
+    prev = np.full(T, -1, dtype=np.int64)
+    for a in range(n_arms):
+        lo = arm_lo[a]
+        for i in range(1, st.arm_n[a]):
+            prev[st.arm_t[lo + i]] = st.arm_t[lo + i - 1]
+    return prev
+
+
+@njit(cache=True)
+def _reasons(d, st, t, prev, ptr, own_r, own_k, tol, out_kind, out_by):
+    """Every reason why ``t`` starts when it does (module docstring); their count."""
+    n = 0
+    S = st.t_start[t]
+    m = st.t_mode[t]
+    a = d.mode_arm[m]
+    for q in range(d.pred_ptr[t], d.pred_ptr[t + 1]):
+        x = d.pred_idx[q]
+        if abs(st.t_end[x] - S) <= tol:
+            out_kind[n] = 0
+            out_by[n] = x
+            n += 1
+    x = prev[t]
+    if x >= 0:
+        su = d.su
+        setup = _setup(
+            su.kind, su.table, su.arm_off, su.arm_count, su.mode_slot, d.mode_of, a, x, t
+        )
+        if abs(st.t_end[x] + setup - S) <= tol:
+            out_kind[n] = 1
+            out_by[n] = x
+            n += 1
+    for i in range(ptr[t], ptr[t + 1]):
+        r = own_r[i]
+        s = st.tl_s[own_k[i]]
+        lo = d.res_lo[r]
+        # ends are sorted like starts (intervals on one timeline never overlap)
+        for k in range(lo, lo + st.res_n[r]):
+            e = st.tl_e[k]
+            if e > s + tol:
+                break
+            if e >= s - tol:
+                y = st.tl_task[k]
+                if y >= 0 and y != t and d.mode_arm[st.t_mode[y]] != a:
+                    out_kind[n] = 2
+                    out_by[n] = y
+                    n += 1
+    return n
+
+
+@njit(cache=True)
+def _chain(d, st, u, tol):
+    """The chain from the task that ends last (module docstring): tasks,
+    reason codes and the tasks they wait for, as arrays of the chain's length.
+    ``u`` (T,) uniform draws pick among several reasons (zeros: the first)."""
+    T = st.t_start.shape[0]
+    n_res = d.res_lo.shape[0]
+    ptr, own_r, own_k = _index(st, n_res, d.res_lo, T)
+    prev = _prev_on_arm(st, d.arm_lo, d.arm_lo.shape[0], T)
+    cap = T + 1 + own_k.shape[0] + st.tl_task.shape[0]
+    kind = np.empty(cap, dtype=np.int64)
+    by = np.empty(cap, dtype=np.int64)
+    c_t = np.empty(T, dtype=np.int64)
+    c_kind = np.empty(T, dtype=np.int64)
+    c_by = np.empty(T, dtype=np.int64)
+    seen = np.zeros(T, dtype=np.bool_)
+    t = 0
+    for i in range(T):
+        if st.t_end[i] > st.t_end[t]:
+            t = i
+    n = 0
+    while not seen[t]:
+        seen[t] = True
+        k = _reasons(d, st, t, prev, ptr, own_r, own_k, tol, kind, by)
+        c_t[n] = t
+        if k == 0:
+            c_kind[n] = 3
+            c_by[n] = -1
+            n += 1
+            break
+        j = 0
+        if k > 1:
+            j = min(int(u[n] * k), k - 1)
+        c_kind[n] = kind[j]
+        c_by[n] = by[j]
+        n += 1
+        t = by[j]
+    return c_t[:n], c_kind[:n], c_by[:n]
+
+
+def critical_chain(
+    inst: Instance, st: State, rng: np.random.Generator | None = None, tol: float = TOL
+) -> list[tuple[int, str, int]]:
+    """The chain that explains the makespan of a complete state, last task first.
+
+    Parameters
+    ----------
+    inst : Instance
+    st : State
+        Every task placed.
+    rng : numpy.random.Generator or None
+        Picks among several reasons at random; None: the first (predecessors,
+        then the arm, then resources in resource order).
+    tol : float
+        Seconds within which two times meet.
+
+    Returns
+    -------
+    list of (task, reason, by)
+        ``reason`` is ``"pred"``, ``"arm"``, ``"resource"`` or ``"release"``
+        (where the chain starts; ``by = -1``).
+    """
+    T = len(st.t_start)
+    if T == 0:
+        return []
+    u = rng.random(T) if rng is not None else np.zeros(T)
+    ts, kinds, bys = _chain(inst.data, st, u, float(tol))
+    return [
+        (int(t), REASONS[int(k)], int(b))
+        for t, k, b in zip(ts.tolist(), kinds.tolist(), bys.tolist(), strict=True)
+    ]
+
+
+def task_reasons(inst: Instance, st: State, t: int, tol: float = TOL) -> list[tuple[str, int]]:
+    """Every reason why task ``t`` of a complete state starts when it does.
+
+    Parameters
+    ----------
+    inst : Instance
+    st : State
+    t : int
+    tol : float
+
+    Returns
+    -------
+    list of (reason, by)
+    """
+    T = len(st.t_start)
+    d = inst.data
+    ptr, own_r, own_k = _index(st, d.res_lo.shape[0], d.res_lo, T)
+    prev = _prev_on_arm(st, d.arm_lo, d.arm_lo.shape[0], T)
+    cap = T + 1 + len(own_k) + len(st.tl_task)
+    kind: IntArray = np.empty(cap, dtype=np.int64)
+    by: IntArray = np.empty(cap, dtype=np.int64)
+    n = int(_reasons(d, st, int(t), prev, ptr, own_r, own_k, float(tol), kind, by))
+    return [(REASONS[int(kind[i])], int(by[i])) for i in range(n)]
