@@ -197,11 +197,13 @@ def reschedule(
     for t, (m, *_rest) in frozen.items():
         modes[t] = m
     order = _order(p, remaining, key)
-    sol = ev.evaluate(order, modes)
+    sol = ev.evaluate_resume(order, modes)
     if sol is None:  # a previous mode cannot be placed any more: let every task choose
         free = modes.copy()
         free[remaining] = -1
-        sol = ev.evaluate(order, free)
+        sol = ev.evaluate_resume(order, free)
+    if sol is not None:
+        ev.anchor(sol)  # the local search resumes from its prefix
     # a cheap bound (the LP of lower_bound would eat the latency budget)
     mind = p.min_duration()
     lb = max(

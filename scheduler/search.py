@@ -31,6 +31,7 @@ from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel import State, compiled, critical_chain, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
+from scheduler.kernel.resume import Snaps, chunk_size, copy_rows, decode_resume, new_snaps
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
 
@@ -138,6 +139,17 @@ class Evaluator:
         self.frozen = frozen
         self.stop: threading.Event | None = None
         """Set by another thread (a racing exact solver that proved the optimum) to stop."""
+        # resumable decoding (evaluate_resume): the anchor's snapshots, and
+        # those of the last list decoded, kept until it becomes the anchor
+        self._snap_n = -1
+        self._every = 1
+        self._snaps: Snaps | None = None
+        self._scratch: Snaps | None = None
+        self._anchor_order: IntArray | None = None
+        self._anchor_modes: IntArray | None = None
+        self._anchor_sol: Solution | None = None
+        self._last_sol: Solution | None = None
+        self._last_k = -1
 
     # ---------------------------------------------------------- decoding
     def decode(
@@ -186,6 +198,81 @@ class Evaluator:
             float(st.t_end.sum()),
             st,
         )
+
+    def evaluate_resume(self, order: IntArray, modes: IntArray | None = None) -> Solution | None:
+        """:meth:`evaluate` by chunked decoding (:mod:`scheduler.kernel.resume`),
+        starting from the anchor's (:meth:`anchor`) last snapshot before the
+        first position where ``order`` or its modes differ from the anchor's:
+        only the changed suffix is placed again."""
+        n = len(order)
+        T = self.problem.n_tasks
+        if n != self._snap_n:
+            self._every = chunk_size(n)
+            self._snaps = new_snaps(self.inst, n, self._every)
+            self._scratch = new_snaps(self.inst, n, self._every)
+            self._snap_n = n
+            self._anchor_order = self._anchor_modes = self._anchor_sol = None
+        snaps, scratch = self._snaps, self._scratch
+        if snaps is None or scratch is None:
+            raise InternalError("snapshot buffers missing")
+        fixed = np.full(T, -1, dtype=np.int64) if modes is None else modes
+        k_from = -1
+        ao, am = self._anchor_order, self._anchor_modes
+        if ao is not None and am is not None:
+            diff = np.flatnonzero(order != ao)
+            p0 = int(diff[0]) if len(diff) else n
+            dm = np.flatnonzero(fixed[order] != am[order])
+            if len(dm):
+                p0 = min(p0, int(dm[0]))
+            k = p0 // self._every
+            while k > 0 and not snaps.ok[k]:
+                k -= 1
+            k_from = k
+        self.evaluations += 1
+        state = self.base.copy() if (k_from < 0 and self.base is not None) else None
+        code, st = decode_resume(
+            self.inst,
+            order,
+            fixed,
+            snaps,
+            scratch,
+            k_from,
+            every=self._every,
+            state=state,
+            chrono=self.chrono,
+            waits=self.waits,
+            release=self.release,
+            allowed=self.allowed,
+            arm_lb=self.arm_lb,
+        )
+        self._last_sol = None
+        if code != 0:
+            return None
+        sol = Solution(
+            order.copy(),
+            st.t_mode.copy(),
+            float(st.t_end.max()) if len(st.t_end) else 0.0,
+            float(st.t_end.sum()),
+            st,
+        )
+        self._last_sol, self._last_k = sol, k_from
+        return sol
+
+    def anchor(self, sol: Solution) -> bool:
+        """Make ``sol`` the list that :meth:`evaluate_resume` resumes from.
+
+        It takes only for the solution :meth:`evaluate_resume` returned last
+        (its snapshots are kept until the next call); returns whether it took
+        (otherwise the next call decodes from the start)."""
+        if sol is self._anchor_sol:
+            return True
+        if sol is not self._last_sol or self._snaps is None or self._scratch is None:
+            self._anchor_order = self._anchor_modes = self._anchor_sol = None
+            return False
+        lo = self._last_k + 1
+        copy_rows(self._scratch, self._snaps, lo, len(self._snaps.ok))
+        self._anchor_order, self._anchor_modes, self._anchor_sol = sol.order, sol.modes, sol
+        return True
 
     def schedule(self, sol: Solution) -> Schedule:
         """The schedule of a decoded solution (built once, then kept on it)."""
@@ -431,6 +518,12 @@ def local_search(
     strength = 2
     budget = Budget(ev, deadline, max_evaluations)
     out_of_budget = budget.spent
+    if not ev.anchor(start) and not out_of_budget():
+        # decode the start once in chunks, so that moves resume from its prefix
+        again = ev.evaluate_resume(start.order, start.modes)
+        if again is not None and again.key() <= start.key():
+            best = cur = again
+            ev.anchor(cur)
     while budget.room_for_iteration() and best.makespan > lower + 1e-9:
         tp = time.perf_counter()
         improved = False
@@ -439,11 +532,12 @@ def local_search(
         for order, modes in moves:
             if out_of_budget():
                 break
-            cand = ev.evaluate(order, modes)
+            cand = ev.evaluate_resume(order, modes)
             if cand is None:
                 continue
             if cand.key() < cur.key():
                 cur = cand
+                ev.anchor(cur)
                 improved = True
                 break
         if cur.key() < best.key():
@@ -458,7 +552,8 @@ def local_search(
                 break
             strength = min(strength + 1, 2 + ev.problem.n_tasks // 10)
             order, modes = perturb(ev, best, rng, strength)
-            kicked = ev.evaluate(order, modes)
+            kicked = ev.evaluate_resume(order, modes)
             if kicked is not None:
                 cur = kicked
+                ev.anchor(cur)
     return best

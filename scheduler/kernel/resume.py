@@ -1,0 +1,306 @@
+# mypy: disallow-untyped-defs=False, disallow-incomplete-defs=False, disallow-untyped-calls=False
+"""List decoding that resumes from a saved prefix (the local search's decoder).
+
+A local-search move changes a list from some position on; every task before
+it is placed exactly as before. :func:`decode_resume` decodes a list in
+*chunks* of ``every`` positions and saves the partial schedule (the whole
+:class:`~scheduler.kernel.compile.State`) at each chunk boundary into a
+:class:`Snaps` buffer; a later list that agrees with it (same tasks, same
+modes) up to some position starts from the last boundary before it, so only
+the changed suffix is placed again.
+
+Chunked decoding is list decoding (:func:`scheduler.kernel.decode`) with one
+difference: a task that cannot be placed yet (a zone held for good by an arm
+still in its start zone, a parked arm with no detour) is retried at the end
+of its chunk, then carried into the next chunk, rather than at the end of
+the whole list. A boundary crossed with a task carried gets no snapshot.
+Decoding the same list twice gives the same schedule, whichever snapshot it
+started from.
+
+Examples
+--------
+>>> import numpy as np
+>>> from scheduler.generate import random_problem
+>>> from scheduler.kernel import compiled, decode
+>>> p = random_problem(3, 20, 2, 1, seed=0)
+>>> inst = compiled(p)
+>>> order = np.asarray(p.topological_order, dtype=np.int64)
+>>> free = np.full(p.n_tasks, -1, dtype=np.int64)
+>>> snaps = new_snaps(inst, len(order), every=5)
+>>> code, st = decode_resume(inst, order, free, snaps, snaps, -1, every=5)
+>>> code, bool(np.array_equal(st.t_start, decode(inst, order, free)[1].t_start))
+(0, True)
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from multiarm.types import BoolArray, FloatArray, IntArray
+from scheduler.kernel._jit import njit
+from scheduler.kernel.api import _blocking
+from scheduler.kernel.compile import Instance, State
+from scheduler.kernel.passes import RESUME, _decode
+
+__all__ = ["Snaps", "chunk_size", "copy_rows", "decode_resume", "new_snaps"]
+
+
+class Snaps(NamedTuple):
+    """Saved partial schedules: row ``k`` of each field is the
+    :class:`~scheduler.kernel.compile.State` field after the first ``k * every``
+    positions of a list; ``ok[k]`` says whether row ``k`` holds one."""
+
+    tl_s: FloatArray
+    tl_e: FloatArray
+    tl_own: IntArray
+    tl_task: IntArray
+    res_n: IntArray
+    arm_t: IntArray
+    arm_n: IntArray
+    t_start: FloatArray
+    t_end: FloatArray
+    t_mode: IntArray
+    t_last: FloatArray
+    t_waits: FloatArray
+    ok: BoolArray
+
+
+def chunk_size(n: int) -> int:
+    """The chunk length used for a list of ``n`` tasks (about ``sqrt(n)``).
+
+    Parameters
+    ----------
+    n : int
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> chunk_size(200)
+    15
+    """
+    return max(4, math.isqrt(max(n, 1)) + 1)
+
+
+def new_snaps(inst: Instance, n: int, every: int) -> Snaps:
+    """An empty snapshot buffer for lists of ``n`` tasks in chunks of ``every``.
+
+    Parameters
+    ----------
+    inst : Instance
+    n : int
+    every : int
+
+    Returns
+    -------
+    Snaps
+    """
+    rows = n // max(every, 1) + 1
+    st = inst.new_state()
+    fields: list[Any] = [np.zeros((rows, *np.shape(x)), dtype=np.asarray(x).dtype) for x in st]
+    fields.append(np.zeros(rows, dtype=np.bool_))
+    return Snaps._make(fields)
+
+
+@njit(cache=True)
+def _save(st, sn, k):
+    sn.tl_s[k] = st.tl_s
+    sn.tl_e[k] = st.tl_e
+    sn.tl_own[k] = st.tl_own
+    sn.tl_task[k] = st.tl_task
+    sn.res_n[k] = st.res_n
+    sn.arm_t[k] = st.arm_t
+    sn.arm_n[k] = st.arm_n
+    sn.t_start[k] = st.t_start
+    sn.t_end[k] = st.t_end
+    sn.t_mode[k] = st.t_mode
+    sn.t_last[k] = st.t_last
+    sn.t_waits[k] = st.t_waits
+    sn.ok[k] = True
+
+
+@njit(cache=True)
+def _load(sn, k, st):
+    st.tl_s[:] = sn.tl_s[k]
+    st.tl_e[:] = sn.tl_e[k]
+    st.tl_own[:] = sn.tl_own[k]
+    st.tl_task[:] = sn.tl_task[k]
+    st.res_n[:] = sn.res_n[k]
+    st.arm_t[:] = sn.arm_t[k]
+    st.arm_n[:] = sn.arm_n[k]
+    st.t_start[:] = sn.t_start[k]
+    st.t_end[:] = sn.t_end[k]
+    st.t_mode[:] = sn.t_mode[k]
+    st.t_last[:] = sn.t_last[k]
+    st.t_waits[:] = sn.t_waits[k]
+
+
+@njit(cache=True)
+def _copy_rows(src, dst, lo, hi):
+    """Rows ``lo:hi`` of every field of ``src`` into ``dst``."""
+    for k in range(lo, hi):
+        dst.tl_s[k] = src.tl_s[k]
+        dst.tl_e[k] = src.tl_e[k]
+        dst.tl_own[k] = src.tl_own[k]
+        dst.tl_task[k] = src.tl_task[k]
+        dst.res_n[k] = src.res_n[k]
+        dst.arm_t[k] = src.arm_t[k]
+        dst.arm_n[k] = src.arm_n[k]
+        dst.t_start[k] = src.t_start[k]
+        dst.t_end[k] = src.t_end[k]
+        dst.t_mode[k] = src.t_mode[k]
+        dst.t_last[k] = src.t_last[k]
+        dst.t_waits[k] = src.t_waits[k]
+        dst.ok[k] = src.ok[k]
+
+
+@njit(cache=True)
+def _decode_chunks(d, st, cx, sc, ot, order, fixed, every, src, k_from, out, buf, outer, inner):
+    """Decode ``order`` in chunks (module docstring), from row ``k_from`` of
+    ``src`` (-1: from ``st`` as given, saved as row 0), saving each boundary
+    into ``out``. ``outer`` = (next position, mid-chunk, carried, chunk
+    length, started) and ``inner`` (the chunk's :func:`_decode` cursor) let a
+    call stopped for missing oracle answers resume. Returns 0, -1 (some task
+    could not be placed) or RESUME."""
+    n_order = order.shape[0]
+    if outer[4] == 0:
+        outer[4] = 1
+        if k_from >= 0:
+            _load(src, k_from, st)
+            outer[0] = k_from * every
+        else:
+            _save(st, out, 0)
+            outer[0] = 0
+    while True:
+        if outer[1] == 0:
+            pos = outer[0]
+            carry = outer[2]
+            if pos >= n_order:
+                return 0 if carry == 0 else -1
+            m = min(every, n_order - pos)
+            for i in range(m):
+                buf[carry + i] = order[pos + i]
+            inner[0] = carry + m
+            inner[1] = 0
+            inner[2] = 0
+            inner[3] = 0
+            outer[3] = carry + m
+            outer[0] = pos + m
+            outer[1] = 1
+        code = _decode(d, st, cx, sc, ot, buf, fixed, inner)
+        if code == RESUME:
+            return RESUME
+        outer[1] = 0
+        if code == 0:
+            outer[2] = 0
+        else:
+            outer[2] = outer[3] - (-(code + 1))
+        pos = outer[0]
+        if pos % every == 0:
+            k = pos // every
+            if outer[2] == 0:
+                _save(st, out, k)
+            else:
+                out.ok[k] = False
+
+
+def copy_rows(src: Snaps, dst: Snaps, lo: int, hi: int) -> None:
+    """Copy rows ``lo:hi`` (snapshots and their flags) from ``src`` to ``dst``.
+
+    Parameters
+    ----------
+    src, dst : Snaps
+    lo, hi : int
+    """
+    _copy_rows(src, dst, int(lo), int(hi))
+
+
+def decode_resume(
+    inst: Instance,
+    order: IntArray,
+    fixed: IntArray,
+    src: Snaps,
+    out: Snaps,
+    k_from: int,
+    *,
+    every: int,
+    state: State | None = None,
+    chrono: bool = False,
+    waits: bool = True,
+    blocking: bool | None = None,
+    release: FloatArray | None = None,
+    allowed: Any = None,
+    arm_lb: FloatArray | None = None,
+) -> tuple[int, State]:
+    """Decode ``order`` in chunks, resuming from snapshot ``k_from`` of ``src``.
+
+    Parameters
+    ----------
+    inst : Instance
+    order : (n,) int
+        Task ids (the whole list, from position 0).
+    fixed : (T,) int
+        ``fixed[t] >= 0`` forces a mode; -1 chooses (as :func:`~scheduler.kernel.decode`).
+    src : Snaps
+        Snapshots of a list that agrees with ``order`` on its first
+        ``k_from * every`` positions (tasks and modes).
+    out : Snaps
+        Receives the snapshots at the boundaries after ``k_from`` (row 0 too
+        when ``k_from`` is -1); may be ``src`` itself.
+    k_from : int
+        The snapshot to start from; -1: from ``state`` (or the empty schedule).
+    every : int
+        Chunk length (the one the snapshots were taken with).
+    state : State or None
+        Mutated into the result; when ``k_from >= 0`` its contents are replaced
+        by the snapshot (default: a new state).
+    chrono, waits, blocking, release, allowed, arm_lb
+        As for :func:`~scheduler.kernel.decode`.
+
+    Returns
+    -------
+    code : int
+        0 on success, -1 when some task could not be placed.
+    state : State
+    """
+    st = inst.new_state() if state is None else state
+    cx = inst.ctx(
+        chrono=chrono,
+        waits=waits,
+        blocking=_blocking(inst, blocking),
+        release=release,
+        allowed=allowed,
+        arm_lb=arm_lb,
+    )
+    order = np.ascontiguousarray(order, dtype=np.int64)
+    fx = np.ascontiguousarray(fixed, dtype=np.int64)
+    buf = np.empty(len(order) + 1, dtype=np.int64)
+    outer = np.zeros(5, dtype=np.int64)
+    inner = np.zeros(4, dtype=np.int64)
+    while True:
+        code = int(
+            _decode_chunks(
+                inst.data,
+                st,
+                cx,
+                inst.scratch,
+                inst.oracle,
+                order,
+                fx,
+                int(every),
+                src,
+                int(k_from),
+                out,
+                buf,
+                outer,
+                inner,
+            )
+        )
+        if code != RESUME:
+            return code, st
+        inst.answer_misses()
