@@ -15,7 +15,9 @@ The kernel is a small package, one job per module:
 * :mod:`~scheduler.kernel.build`: the :class:`~scheduler.schedule.Schedule`
   of a complete state;
 * :mod:`~scheduler.kernel.critical`: the critical chain of a complete state
-  (what the local search moves).
+  (what the local search moves);
+* :mod:`~scheduler.kernel.resume`: chunked list decoding that resumes from a
+  saved prefix (the local search's decoder).
 
 ``MULTIARM_NO_JIT=1`` (or ``NUMBA_DISABLE_JIT=1``) runs the same code as
 plain Python, which ``benchmarks/bench_kernel.py`` uses to measure what the
@@ -46,6 +48,7 @@ from pathlib import Path
 from scheduler.kernel import critical as _critical
 from scheduler.kernel import passes as _passes
 from scheduler.kernel import place as _place
+from scheduler.kernel import resume as _resume
 from scheduler.kernel._jit import EPS, INF, drop_stale_cache, jit_enabled
 from scheduler.kernel.api import (
     decode,
@@ -60,8 +63,13 @@ from scheduler.kernel.compile import Arrays, Ctx, Instance, OracleTable, Scratch
 from scheduler.kernel.critical import critical_chain
 
 drop_stale_cache(
-    (_passes._decode, _place._query, _critical._chain),
-    [Path(_place.__file__), Path(_passes.__file__), Path(_critical.__file__)],
+    (_passes._decode, _place._query, _critical._chain, _resume._decode_chunks),
+    [
+        Path(_place.__file__),
+        Path(_passes.__file__),
+        Path(_critical.__file__),
+        Path(_resume.__file__),
+    ],
 )
 
 __all__ = [

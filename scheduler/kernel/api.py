@@ -25,6 +25,7 @@ from multiarm.errors import UsageError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel._jit import jit_enabled
 from scheduler.kernel.compile import Instance, State, compiled
+from scheduler.kernel.critical import _chain, critical_chain
 from scheduler.kernel.passes import (
     RESUME,
     _decode,
@@ -34,6 +35,7 @@ from scheduler.kernel.passes import (
     _seq_decode,
 )
 from scheduler.kernel.place import MISSING, PLACED
+from scheduler.kernel.resume import _decode_chunks, chunk_size, copy_rows, decode_resume, new_snaps
 from scheduler.problem import Model, Window
 
 __all__ = ["decode", "expand", "expand_blocking", "place_blocking", "seq_decode", "warm_up"]
@@ -370,7 +372,7 @@ _WARM = False
 
 def _cached_on_disk() -> bool:
     """Whether numba's on-disk cache already holds the kernel's entry points."""
-    for fn in (_decode, _expand, _expand_blocking, _place_one, _seq_decode):
+    for fn in (_decode, _expand, _expand_blocking, _place_one, _seq_decode, _chain, _decode_chunks):
         cache = getattr(fn, "_cache", None)
         path = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
         if path is None or not os.path.exists(path):
@@ -443,6 +445,12 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         if p.blocking is not None:
             expand_blocking(inst, st2, np.array([1]), np.array([2]))
             place_blocking(inst, st2, 1, 2, end)
+        every = chunk_size(len(order))
+        snaps = new_snaps(inst, len(order), every)
+        _code, st3 = decode_resume(inst, order, free, snaps, snaps, -1, every=every)
+        decode_resume(inst, order, free, snaps, snaps, 0, every=every)
+        copy_rows(snaps, new_snaps(inst, len(order), every), 0, 1)
+        critical_chain(inst, st3)
     _WARM = True
     spent = time.perf_counter() - t0
     log.debug("scheduler kernel ready in %.1f s", spent)

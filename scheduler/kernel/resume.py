@@ -39,9 +39,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from multiarm.errors import UsageError
 from multiarm.types import BoolArray, FloatArray, IntArray
 from scheduler.kernel._jit import njit
-from scheduler.kernel.api import _blocking
 from scheduler.kernel.compile import Instance, State
 from scheduler.kernel.passes import RESUME, _decode
 
@@ -267,12 +267,20 @@ def decode_resume(
     code : int
         0 on success, -1 when some task could not be placed.
     state : State
+
+    Raises
+    ------
+    UsageError
+        Blocking asked of a problem without an oracle.
     """
     st = inst.new_state() if state is None else state
+    has = inst.problem.blocking is not None
+    if blocking and not has:
+        raise UsageError(f"problem {inst.problem.name!r} has no blocking oracle")
     cx = inst.ctx(
         chrono=chrono,
         waits=waits,
-        blocking=_blocking(inst, blocking),
+        blocking=has if blocking is None else bool(blocking),
         release=release,
         allowed=allowed,
         arm_lb=arm_lb,
