@@ -16,6 +16,7 @@ from benchmarks import (
     bench_scale,
     bench_sim,
     bench_simkernel,
+    bench_small,
     bench_sweep,
     bench_zones,
 )
@@ -35,6 +36,7 @@ def main() -> None:
         bench_network,
         bench_scale,
         bench_generated,
+        bench_small,
         bench_fjsp,
         bench_sweep,
     ):

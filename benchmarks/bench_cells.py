@@ -1,23 +1,32 @@
 """The built-in cells: compile time, detours, and schedule quality, side by side in one run.
 
-``python -m benchmarks.bench_cells [--quick]`` writes ``results/cells.md`` and
-``results/cells.json``:
+A thin wrapper of two sweeps: ``benchmarks/sweeps/cells_compile.toml``
+(``benchmark`` runs of the measurement functions below, one per table, each
+measuring its whole comparison in one run) and ``benchmarks/sweeps/cells.toml``
+(the schedules). ``python -m benchmarks.bench_cells [--quick]`` writes
+``results/cells.md`` and ``results/cells.json`` (and the two Parquet files):
 
-1. Compile time per cell, cold (first in the process: numba's one-time
-   compiles included) and warm (again in the same process), and per mode.
+1. Compile time per cell (:func:`compile_times`), cold (first in the
+   process: numba's one-time compiles included) and warm (again in the same
+   process), and per mode.
 2. Detours on ``scara4`` with arms parked at their last poses (``park =
-   "last"``): every blocking query of every mode against every other arm
-   parked after each of its tasks; how they were settled (pre-test, no
-   contact, detour, none) and the OMPL detour times (median, p95) and the
-   share solved within 100 ms.
-3. The detour planner's single-state validity check on ``scara4`` (arm 0
-   against arm 1 parked at home, uniform random joints, seed 0): the
-   compiled path (compiled forward kinematics, one compiled bounding-capsule
-   call, FCL only for candidates) next to the numpy reference path (numpy
-   forward kinematics and matmul shape poses, then the same capsule test and
-   FCL), in one run; both must give the same answers.
+   "last"``, :func:`detours`): every blocking query of every mode against
+   every other arm parked after each of its tasks; how they were settled
+   (pre-test, no contact, detour, none) and the OMPL detour times (median,
+   p95) and the share solved within 100 ms.
+3. The detour planner's single-state validity check on ``scara4``
+   (:func:`validity_checks`: arm 0 against arm 1 parked at home, uniform
+   random joints): the compiled path (compiled forward kinematics, one
+   compiled bounding-capsule call, FCL only for candidates) next to the
+   numpy reference path (numpy forward kinematics and matmul shape poses,
+   then the same capsule test and FCL), in one run; both must give the same
+   answers.
 4. Schedule quality on the compiled cells: greedy, tree and CP-SAT at the
-   same time limit (seed 0), makespans checked by ``scheduler.validate``.
+   same time limit (seed 0), makespans checked by ``scheduler.validate``
+   (:func:`workcell.experiments.analysis.cells_table`).
+
+The schedule sweep resumes where a previous run stopped (``--fresh`` runs it
+again); the speed measurements are always taken again.
 """
 
 from __future__ import annotations
@@ -30,15 +39,18 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.common import write
-from scheduler import lower_bound, solve, validate
+from benchmarks.common import output_dir, publish, run_table_sweep, sweep_arguments
 from workcell import compile_cell_detailed, load_example
 from workcell.oracle import CellOracle
 
 
-def _compile(names: list[str]) -> list[dict[str, Any]]:
+def compile_times(seed: int, cells: tuple[str, ...] | list[str]) -> list[dict[str, Any]]:
+    """Compile each built-in cell twice (cold, then warm) in this process; one row per cell.
+
+    ``seed`` is unused (compiling is deterministic); the sweep passes one to every run.
+    """
     rows = []
-    for name in names:
+    for name in cells:
         cell = load_example(name)
         t0 = time.perf_counter()
         cc = compile_cell_detailed(cell)
@@ -61,15 +73,18 @@ def _compile(names: list[str]) -> list[dict[str, Any]]:
     return rows
 
 
-def _detours(quick: bool) -> dict[str, Any]:
+def detours(seed: int, every: int = 1) -> dict[str, Any]:
+    """Every blocking query of every ``every``-th mode on ``scara4`` with arms parked last.
+
+    ``seed`` is unused (the oracle's planner is seeded by the cell file).
+    """
     cell = replace(load_example("scara4"), park="last")
     cc = compile_cell_detailed(cell)
     p, o = cc.problem, cc.problem.blocking
     assert isinstance(o, CellOracle)
     t0 = time.perf_counter()
     costs = []
-    modes = range(0, p.n_modes, 4 if quick else 1)
-    for m in modes:
+    for m in range(0, p.n_modes, every):
         for b in range(p.n_arms):
             for pose in [t for t in range(p.n_tasks) if p.mode_of[b, t] >= 0]:
                 costs.append(o.cost(m, b, pose))
@@ -96,7 +111,8 @@ def _detours(quick: bool) -> dict[str, Any]:
     }
 
 
-def _checks(n: int) -> dict[str, Any]:
+def validity_checks(seed: int, states: int) -> dict[str, Any]:
+    """The compiled and the numpy single-state checks on the same ``states`` random states."""
     from workcell.geometry._sweep_jit import capsules_touch
     from workcell.geometry.planner import DetourPlanner, ObstacleSet
 
@@ -106,7 +122,8 @@ def _checks(n: int) -> dict[str, Any]:
         mover, ObstacleSet.from_arm(blocker, blocker.home, 0.005), resolution=0.005, clearance=0.005
     )
     lo, hi = mover.joint_limits[:, 0], mover.joint_limits[:, 1]
-    qs = np.random.default_rng(0).uniform(lo, hi, (n, mover.dof))
+    n = states
+    qs = np.random.default_rng(seed).uniform(lo, hi, (n, mover.dof))
     idx = np.array([s.frame for s in mover.shapes])
     off = np.stack([s.offset for s in mover.shapes])
 
@@ -146,63 +163,73 @@ def _checks(n: int) -> dict[str, Any]:
     }
 
 
-def _quality(names: list[str], limit: float) -> list[dict[str, Any]]:
-    rows = []
-    for name in names:
-        p = compile_cell_detailed(load_example(name)).problem
-        lb = lower_bound(p)
-        for solver in ("greedy", "tree", "cpsat"):
-            r = solve(p, solver, time_limit=limit, seed=0)
-            mk = validate(p, r.schedule) if r.schedule is not None else math.inf
-            rows.append(
-                {
-                    "cell": name,
-                    "solver": solver,
-                    "status": r.status.value,
-                    "makespan (s)": round(mk, 1) if math.isfinite(mk) else "none",
-                    "lower bound (s)": round(lb, 1),
-                    "time (s)": round(r.runtime, 1),
-                }
-            )
-    return rows
-
-
 def _table(rows: list[dict[str, Any]]) -> str:
     cols = list(rows[0])
     out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-    out += ["| " + " | ".join(str(r[c]) for c in cols) + " |" for r in rows]
+    out += ["| " + " | ".join(_cell(r[c]) for c in cols) + " |" for r in rows]
     return "\n".join(out) + "\n"
 
 
-def main() -> None:
+def _cell(x: Any) -> str:
+    return "nan" if isinstance(x, float) and math.isnan(x) else str(x)
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run both sweeps and write the tables.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        Command-line arguments (default: ``sys.argv``).
+    """
+    import pandas as pd
+
+    from workcell.experiments.analysis import cells_table, measurements
+
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--quick", action="store_true", help="small sizes, a smoke run")
-    args = ap.parse_args()
-    names = ["supersigma", "scara4"] if args.quick else ["supersigma", "scara4", "cell8"]
-    limit = 1.0 if args.quick else 10.0
-    comp = _compile(names)
-    det = _detours(args.quick)
-    chk = _checks(500 if args.quick else 5000)
-    qual = _quality(names, limit)
+    sweep_arguments(ap)
+    args = ap.parse_args(argv)
+    out = output_dir(args.quick)
+    # the speed measurements are always taken again, side by side in this run
+    speed = run_table_sweep(
+        "cells",
+        argparse.Namespace(**{**vars(args), "fresh": True}),
+        out,
+        sweep_file="cells_compile",
+    )
+    sched = run_table_sweep("cells", args, out)
+    head = ["family", "instance", "seed", "repetition", "load_average"]
+    parts = {f: measurements(speed, f).drop(columns=head) for f in ("compile", "detours", "checks")}
+    limits = sorted({float(t) for t in sched["time_limit"].dropna()})
     md = (
-        "# Built-in cells (`python -m benchmarks.bench_cells"
-        + (" --quick" if args.quick else "")
-        + "`)\n\nMachine: 2 cores shared with other work while this ran; times are"
-        + " noisy (compare the ratios in one run, not absolute times across runs).\n"
-        + "\n## Compile\n\n"
-        + _table(comp)
+        "# Built-in cells\n\nMachine: 2 cores shared with other work while this ran; times are"
+        " noisy (compare the ratios in one run, not absolute times across runs).\n"
+        "\n## Compile\n\n"
+        + _table(parts["compile"].to_dict("records"))
         + "\n## Detours on scara4, arms parked at their last poses\n\n"
-        + _table([det])
+        + _table(parts["detours"].to_dict("records"))
         + "\n## Single-state validity check on scara4 (best of 3 passes)\n\n"
-        + _table([chk])
-        + f"\n## Schedules at {limit:g} s per solver (seed 0, validated)\n\n"
-        + _table(qual)
+        + _table(parts["checks"].to_dict("records"))
+        + f"\n## Schedules at {', '.join(f'{t:g}' for t in limits)} s per solver (seed 0, validated)\n\n"
+        + cells_table(sched)
     )
-    path = write(
-        "cells", {"seed": 0, "compile": comp, "detours": det, "checks": chk, "quality": qual}, md
+    both = pd.concat([speed, sched], ignore_index=True)
+    path = publish(
+        "cells",
+        both,
+        md,
+        out,
+        sweeps=("cells_compile", "cells"),
+        quick=args.quick,
+        flags="--fresh",
+        extra={
+            "compile": parts["compile"].to_dict("records"),
+            "detours": parts["detours"].to_dict("records"),
+            "checks": parts["checks"].to_dict("records"),
+        },
+        rows=sched.drop(columns=["dependencies"]),
     )
-    print(md)
-    print(f"written to {path}")
+    print(path.read_text())
 
 
 if __name__ == "__main__":

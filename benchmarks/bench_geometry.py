@@ -17,17 +17,25 @@ reaching across the first one's workspace.
 * an OMPL ``Benchmark`` run over several planners on the detour query,
   written as ``results/geometry_ompl.log``.
 
-Run: ``python -m benchmarks.bench_geometry [--seed 0] [--quick]``.
+A thin wrapper of the sweep ``benchmarks/sweeps/geometry.toml`` (one
+``benchmark`` run per part: :func:`validity`, :func:`sweep`,
+:func:`ompl_log`, each measuring its whole comparison); it measures again
+on every call. Results: ``benchmarks/results/geometry.parquet``, ``.json``
+and ``.md``.
+
+Run: ``python -m benchmarks.bench_geometry [--quick]``.
 """
 
 from __future__ import annotations
 
 import argparse
-import time
+import tempfile
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from benchmarks.common import RESULTS, best_rate, write
+from benchmarks.common import best_rate, output_dir, publish, run_table_sweep, sweep_arguments
 from tests.workcell.geometry.fake_arm import PlanarArm
 from workcell.geometry import (
     DetourPlanner,
@@ -39,8 +47,11 @@ from workcell.geometry import (
 )
 from zones import examples
 
+NAME = "geometry"
+
 
 def validity(seed: int, n: int) -> dict[str, float]:
+    """Validity checks per second: one by one, along edges, inside ``plan_detour``."""
     arm = PlanarArm()
     parked = ObstacleSet.from_arm(PlanarArm("o", base_xy=(1.2, 0.0)), np.array([np.pi, 0.0]))
     ctx = DetourPlanner(arm, parked, resolution=0.01)
@@ -78,6 +89,7 @@ def validity(seed: int, n: int) -> dict[str, float]:
 
 
 def sweep(seed: int, n: int) -> dict[str, float]:
+    """Link-zone checks per second: the vectorised sweep and plain FCL on the same samples."""
     arm = PlanarArm()
     zm = examples.load_example("scara4")
     n_solids = sum(len(zm.primitives(z)) for z in range(zm.n_zones))
@@ -107,12 +119,27 @@ def sweep(seed: int, n: int) -> dict[str, float]:
     }
 
 
-def ompl_log(seed: int, runs: int) -> dict[str, dict[str, float]]:
+def ompl_log(seed: int, runs: int) -> list[dict[str, Any]]:
+    """OMPL's Benchmark over four planners on the detour query: one row per planner.
+
+    The first row also holds the OMPL benchmark log's text (``log``), which
+    the wrapper writes as ``geometry_ompl.log``.
+    """
     arm = PlanarArm()
     parked = ObstacleSet.from_arm(PlanarArm("o", base_xy=(1.2, 0.0)), np.array([np.pi, 0.0]))
-    RESULTS.mkdir(exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        log = Path(tmp) / "geometry_ompl.log"
+        rows = _ompl(arm, parked, log, seed, runs)
+        text = log.read_text() if log.is_file() else ""
+    out: list[dict[str, Any]] = [{"planner": name, **row} for name, row in rows.items()]
+    if out:
+        out[0]["log"] = text
+    return out
+
+
+def _ompl(arm: Any, parked: Any, log: Path, seed: int, runs: int) -> dict[str, dict[str, float]]:
     return write_ompl_benchmark_log(
-        RESULTS / "geometry_ompl.log",
+        log,
         arm,
         np.array([-1.0, 0.3]),
         np.array([1.0, -0.3]),
@@ -124,21 +151,17 @@ def ompl_log(seed: int, runs: int) -> dict[str, dict[str, float]]:
     )
 
 
-def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--quick", action="store_true", help="smaller sizes (smoke run)")
-    args = ap.parse_args(argv)
-    t0 = time.perf_counter()
-    v = validity(args.seed, 400 if args.quick else 4000)
-    s = sweep(args.seed, 500 if args.quick else 20000)
-    o = ompl_log(args.seed, 2 if args.quick else 10)
+def table(m: Any) -> str:
+    """The Markdown tables of the measured rows (the three parts)."""
+    v = m[m["family"] == "validity"].iloc[0]
+    s = m[m["family"] == "sweep"].iloc[0]
+    o = m[m["family"] == "ompl"]
     lines = [
         "# Geometry throughput",
         "",
-        f"seed {args.seed}; best of 3-5 runs, one process, one core; test arm: 2 capsule links "
-        "(numpy forward kinematics; the built-in arms' compiled check is measured in "
-        "cells.md). Machine: 2 cores shared with other work while this ran.",
+        f"seed {', '.join(map(str, sorted(set(map(int, m['seed'])))))}; best of 3-5 runs, one "
+        "process, one core; test arm: 2 capsule links (numpy forward kinematics; the built-in "
+        "arms' compiled check is measured in cells.md).",
         "",
         "| validity checks (arm vs parked arm, FCL) | checks/s | us/check |",
         "|---|---|---|",
@@ -160,16 +183,35 @@ def main(argv: list[str] | None = None) -> None:
         "| OMPL planner (detour query) | solved | median time s | median simplified length |",
         "|---|---|---|---|",
     ]
-    for name, row in o.items():
-        lines.append(f"| {name} | {row['solved']:.2f} | {row['time']:.4f} | {row['length']:.3f} |")
-    lines += ["", f"total {time.perf_counter() - t0:.1f} s", ""]
-    table = "\n".join(lines)
-    write(
-        "geometry",
-        {"seed": args.seed, "validity": v, "sweep": s, "ompl": o, "quick": args.quick},
-        table,
-    )
-    print(table)
+    for _, row in o.iterrows():
+        lines.append(
+            f"| {row['planner']} | {row['solved']:.2f} | {row['time']:.4f} | {row['length']:.3f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the sweep and write the tables and the OMPL log.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        Command-line arguments (default: ``sys.argv``).
+    """
+    from workcell.experiments.analysis import measurements
+
+    ap = argparse.ArgumentParser(description=__doc__)
+    sweep_arguments(ap, fresh=True)
+    args = ap.parse_args(argv)
+    out = output_dir(args.quick)
+    df = run_table_sweep(NAME, args, out)
+    m = measurements(df)
+    logs = [t for t in m.get("log", []) if isinstance(t, str) and t]
+    if logs:
+        (out / "geometry_ompl.log").write_text(logs[0])
+    m = m.drop(columns=["log"], errors="ignore")
+    path = publish(NAME, df, table(m), out, quick=args.quick, rows=m)
+    print(path.read_text())
 
 
 if __name__ == "__main__":

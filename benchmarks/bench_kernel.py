@@ -3,14 +3,16 @@
 The placement kernel (:mod:`scheduler.kernel`) runs compiled by numba; with
 ``MULTIARM_NO_JIT=1`` the very same code runs as plain Python. Both are run
 here, in two processes side by side, on the same seeded problems, and the
-ratio is reported. Results: ``benchmarks/results/kernel.json`` and ``kernel.md``.
+ratio is reported. A thin wrapper of the sweep ``benchmarks/sweeps/kernel.toml``
+(one ``benchmark`` run of :func:`measure` per size): it measures again on
+every call (``--resume`` keeps recorded runs), stores the rows in
+``benchmarks/results/kernel.parquet`` and writes ``kernel.md`` and ``kernel.json``.
 
-Run: ``python -m benchmarks.bench_kernel [--seconds 3] [--quick]``.
+Run: ``python -m benchmarks.bench_kernel [--quick]``.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
@@ -18,7 +20,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from benchmarks.common import write
+from benchmarks.common import table_main
+
+NAME = "kernel"
 
 PROBE = """
 import json, sys, time
@@ -26,9 +30,9 @@ import numpy as np
 from scheduler.generate import random_problem
 from scheduler.kernel import compiled, decode, jit_enabled, warm_up
 from scheduler.search import priority_order
-seconds = float(sys.argv[1]); size = json.loads(sys.argv[2])
+seconds = float(sys.argv[1]); size = json.loads(sys.argv[2]); seed = int(sys.argv[3])
 warm_up()  # compile or load
-p = random_problem(*size, seed=0)
+p = random_problem(*size, seed=seed)
 inst = compiled(p)
 order = priority_order(p); free = np.full(p.n_tasks, -1)
 decode(inst, order, free)
@@ -39,12 +43,13 @@ print(json.dumps({"jit": jit_enabled(), "decodes_per_s": n / (time.perf_counter(
 """
 
 
-def run(seconds: float, size: list[int], jit: bool) -> dict[str, float]:
+def run(seconds: float, size: list[int], jit: bool, seed: int = 0) -> dict[str, float]:
+    """Decodes per second of one problem in a new process, compiled or plain Python."""
     env = dict(os.environ)
     if not jit:
         env["MULTIARM_NO_JIT"] = "1"
     out = subprocess.run(
-        [sys.executable, "-c", PROBE, str(seconds), json.dumps(size)],
+        [sys.executable, "-c", PROBE, str(seconds), json.dumps(size), str(seed)],
         env=env,
         cwd=Path(__file__).resolve().parents[1],
         capture_output=True,
@@ -54,46 +59,48 @@ def run(seconds: float, size: list[int], jit: bool) -> dict[str, float]:
     return json.loads(out.stdout.strip().splitlines()[-1])  # type: ignore[no-any-return]
 
 
-def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    ap.add_argument("--seconds", type=float, default=3.0)
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args(argv)
-    sizes = [[4, 50, 4, 1], [8, 200, 8, 2], [16, 1000, 30, 4]]
-    if args.quick:
-        sizes, args.seconds = sizes[:1], 0.3
-    rows: list[dict[str, Any]] = []
-    for size in sizes:
-        fast = run(args.seconds, size, True)
-        slow = run(args.seconds, size, False)
-        rows.append(
-            {
-                "size": size,
-                "numba": fast["decodes_per_s"],
-                "python": slow["decodes_per_s"],
-                "ratio": fast["decodes_per_s"] / slow["decodes_per_s"],
-            }
-        )
-        print(rows[-1], flush=True)
+def measure(seed: int, size: list[int] | tuple[int, ...], seconds: float) -> dict[str, Any]:
+    """One row of the table: numba and plain Python on the problem of ``size`` and ``seed``."""
+    fast = run(seconds, list(size), True, seed)
+    slow = run(seconds, list(size), False, seed)
+    return {
+        "size": list(size),
+        "seconds": seconds,
+        "numba": fast["decodes_per_s"],
+        "python": slow["decodes_per_s"],
+        "ratio": fast["decodes_per_s"] / slow["decodes_per_s"],
+    }
+
+
+def table(m: Any) -> str:
+    """The Markdown table of the measured rows."""
     lines = [
         "# Kernel: numba vs plain Python",
         "",
-        f"Full decodes (earliest-finish mode choice, waits) per second, {args.seconds:g} s each, same code, "
-        "two processes side by side.",
+        f"Full decodes (earliest-finish mode choice, waits) per second, "
+        f"{', '.join(f'{s:g}' for s in sorted(set(m['seconds'])))} s each, same code, two "
+        f"processes side by side; problem seeds {sorted(set(map(int, m['seed'])))}.",
         "",
         "| arms x tasks x zones x tools | plain Python /s | numba /s | ratio |",
         "|---|---|---|---|",
     ]
-    for r in rows:
+    for _, r in m.iterrows():
         lines.append(
-            f"| {'x'.join(map(str, r['size']))} | {r['python']:.1f} | {r['numba']:.1f} | {r['ratio']:.0f}x |"
+            f"| {'x'.join(map(str, r['size']))} | {r['python']:.1f} | {r['numba']:.1f} | "
+            f"{r['ratio']:.0f}x |"
         )
-    path = write(
-        "kernel", {"seconds": args.seconds, "seed": 0, "rows": rows}, "\n".join(lines) + "\n"
-    )
-    print(path.read_text())
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the sweep and write the table.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        Command-line arguments (default: ``sys.argv``).
+    """
+    table_main(NAME, table, argv, __doc__, speed=True)
 
 
 if __name__ == "__main__":

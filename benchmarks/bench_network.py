@@ -26,8 +26,14 @@ A plot of the delay tails (complementary CDF) goes to
 ``results/network_tails.png``. Results: ``results/network.json`` and
 ``network.md``.
 
-Run: ``python -m benchmarks.bench_network [--rounds 100000] [--big 1000000]
-[--ticks 200] [--quick]``.
+A thin wrapper of the sweep ``benchmarks/sweeps/network.toml`` (one
+``benchmark`` run per part: :func:`measure_rounds`, :func:`measure_variants`,
+:func:`measure_event`, :func:`measure_makespan`; the delay tails of the plot
+are stored with their rows, a few thousand points per curve); it measures
+again on every call. Results: ``benchmarks/results/network.parquet``,
+``.json`` and ``.md``.
+
+Run: ``python -m benchmarks.bench_network [--quick]``.
 """
 
 from __future__ import annotations
@@ -40,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.common import RESULTS, write
+from benchmarks.common import output_dir, publish, run_table_sweep, sweep_arguments
 from multiarm.types import FloatArray
 from workcell.sim.kernel import Kernel
 from workcell.sim.medium import Frame, trajectory_bytes
@@ -53,6 +59,7 @@ from workcell.sim.network import (
     make_medium,
 )
 
+NAME = "network"
 SEED = 0
 US = 1e-6
 CELL = "scara4"
@@ -85,7 +92,7 @@ def chunked(fn: Any, rounds: int, chunk: int, **kw: Any) -> FloatArray:
 
 
 def rounds_part(
-    stations: list[int], loads: list[float], rounds: int, big: int
+    stations: list[int], loads: list[float], rounds: int, big: int, seed: int = SEED
 ) -> tuple[list[dict[str, Any]], dict[str, FloatArray]]:
     rows: list[dict[str, Any]] = []
     tails: dict[str, FloatArray] = {}
@@ -95,7 +102,7 @@ def rounds_part(
             r = big if (n == 10 and load == 1.0) else rounds
             for name, fn in (("csma-dcr", dcr_rounds), ("ethernet", ethernet_rounds)):
                 t0 = time.perf_counter()
-                d = chunked(fn, r, 100_000, n_stations=n, load=load, seed=SEED)
+                d = chunked(fn, r, 100_000, n_stations=n, load=load, seed=seed)
                 wall = time.perf_counter() - t0
                 row = {
                     "medium": name,
@@ -113,7 +120,7 @@ def rounds_part(
     return rows, tails
 
 
-def variants_part(rounds: int) -> list[dict[str, Any]]:
+def variants_part(rounds: int, seed: int = SEED) -> list[dict[str, Any]]:
     """10 stations at full load: the reduced parameters (S2.9) and a slotted
     resolution that charges each silent station one slot."""
     rows: list[dict[str, Any]] = []
@@ -125,7 +132,7 @@ def variants_part(rounds: int) -> list[dict[str, Any]]:
     for label, fn, kw, load in cases:
         bound = dcr_bound(**{k: v for k, v in kw.items() if k != "empty_slot"})
         t0 = time.perf_counter()
-        d = chunked(fn, rounds, 100_000, n_stations=10, load=load, seed=SEED, **kw)
+        d = chunked(fn, rounds, 100_000, n_stations=10, load=load, seed=seed, **kw)
         row = {
             "medium": label,
             "stations": 10,
@@ -161,7 +168,7 @@ def event_delays(name: str, n: int, load: float, ticks: int, seed: int) -> tuple
 
 
 def event_part(
-    stations: list[int], loads: list[float], ticks: int
+    stations: list[int], loads: list[float], ticks: int, seed: int = SEED
 ) -> tuple[list[dict[str, Any]], dict[str, FloatArray]]:
     rows: list[dict[str, Any]] = []
     tails: dict[str, FloatArray] = {}
@@ -170,7 +177,7 @@ def event_part(
         for load in loads:
             for name in EVENT_MEDIA:
                 t0 = time.perf_counter()
-                d, drops = event_delays(name, n, load, ticks, SEED)
+                d, drops = event_delays(name, n, load, ticks, seed)
                 wall = time.perf_counter() - t0
                 row = {
                     "medium": name,
@@ -189,7 +196,7 @@ def event_part(
     return rows, tails
 
 
-def makespan_part(quick: bool) -> tuple[list[dict[str, Any]], str]:
+def makespan_part(quick: bool, seed: int = SEED) -> tuple[list[dict[str, Any]], str]:
     """The same cell and schedule over every medium (needs workcell.sim.run),
     and under the SUPERSIGMA central unit (``run_schedule``)."""
     import scheduler
@@ -199,7 +206,7 @@ def makespan_part(quick: bool) -> tuple[list[dict[str, Any]], str]:
     cell = workcell.load_example(CELL)
     compiled = workcell.compile_cell_detailed(cell)
     problem = compiled.problem
-    sched = scheduler.solve(problem, solver="greedy", time_limit=5.0, seed=SEED).schedule
+    sched = scheduler.solve(problem, solver="greedy", time_limit=5.0, seed=seed).schedule
     if sched is None:
         return [], f"no greedy schedule for {CELL}"
     rows: list[dict[str, Any]] = []
@@ -227,7 +234,7 @@ def makespan_part(quick: bool) -> tuple[list[dict[str, Any]], str]:
     for name in ("ideal", "csma-dcr") if quick else MEDIA:
         t0 = time.perf_counter()
         try:
-            res = simulate(compiled, sched, seed=SEED, medium=name)
+            res = simulate(compiled, sched, seed=seed, medium=name)
         except Exception as exc:  # reported in the table, not hidden
             rows.append({"medium": name, "error": f"{type(exc).__name__}: {exc}"})
             print(rows[-1], flush=True)
@@ -253,7 +260,62 @@ def makespan_part(quick: bool) -> tuple[list[dict[str, Any]], str]:
     return rows, ""
 
 
-def plot(tails: dict[str, FloatArray], bound: float, path: Any) -> None:
+def tail_curve(d: FloatArray, points: int = 1500) -> list[list[float]]:
+    """The complementary CDF of delays ``d`` as ``[delay_us, P(delay > x)]`` pairs.
+
+    A few thousand points, dense in the tail (what the plot draws; stored
+    with the measured rows instead of every delay).
+    """
+    ok = np.sort(d[~np.isnan(d)]) / US
+    n = ok.size
+    if n == 0:
+        return []
+    ranks = np.unique(
+        np.concatenate([np.linspace(0, n - 1, points), n - np.logspace(0, np.log10(n), points)])
+        .astype(np.int64)
+        .clip(0, n - 1)
+    )
+    return [[float(ok[i]), float(1.0 - i / n)] for i in ranks]
+
+
+def measure_rounds(
+    seed: int, stations: list[int], loads: list[float], rounds: int, big: int
+) -> list[dict[str, Any]]:
+    """Contention rounds of CSMA/DCR and Ethernet over stations x load (part 1)."""
+    ethernet_rounds(10, seed=seed)  # compile the numba kernel outside the timings
+    rows, tails = rounds_part(list(stations), list(loads), rounds, big, seed)
+    for r in rows:
+        key = f"{r['medium']} N=10 load {r['load']:g}"
+        if key in tails:
+            r["tail"] = tail_curve(tails[key])
+    return rows
+
+
+def measure_variants(seed: int, rounds: int) -> list[dict[str, Any]]:
+    """The reduced parameters and the slotted resolution at 10 stations (part 1)."""
+    ethernet_rounds(10, seed=seed)
+    return variants_part(rounds, seed)
+
+
+def measure_event(
+    seed: int, stations: list[int], loads: list[float], ticks: int
+) -> list[dict[str, Any]]:
+    """Event-level media (part 2)."""
+    rows, tails = event_part(list(stations), list(loads), ticks, seed)
+    for r in rows:
+        key = f"{r['medium']} (event level)"
+        if r["stations"] == 10 and r["load"] == 1.0 and key in tails:
+            r["tail"] = tail_curve(tails[key])
+    return rows
+
+
+def measure_makespan(seed: int, every_medium: bool) -> list[dict[str, Any]]:
+    """One cell and schedule over each medium and under the central unit (part 3)."""
+    rows, note = makespan_part(not every_medium, seed)
+    return [{"note": note}] if not rows else [{**r, "note": note} for r in rows]
+
+
+def plot(tails: dict[str, list[list[float]]], bound: float, path: Any) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -261,19 +323,11 @@ def plot(tails: dict[str, FloatArray], bound: float, path: Any) -> None:
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, event in zip(axes, (False, True), strict=True):
-        for label, d in tails.items():
-            if ("event level" in label) != event:
+        for label, curve in tails.items():
+            if ("event level" in label) != event or not curve:
                 continue
-            ok = np.sort(d[~np.isnan(d)]) / US
-            if ok.size == 0:
-                continue
-            n = ok.size  # a few thousand points, dense in the tail
-            ranks = np.unique(
-                np.concatenate(
-                    [np.linspace(0, n - 1, 2000), n - np.logspace(0, np.log10(n), 2000)]
-                ).astype(np.int64)
-            )
-            ax.loglog(ok[ranks], 1.0 - ranks / n, label=label, lw=1.3)
+            xy = np.asarray(curve, dtype=np.float64)
+            ax.loglog(xy[:, 0], xy[:, 1], label=label, lw=1.3)
         ax.axvline(bound / US, color="k", ls="--", lw=1, label=f"dcr_bound {bound / US:.1f} us")
         ax.set_xlabel("delay (us)")
         ax.set_ylabel("P(delay > x)")
@@ -302,44 +356,66 @@ def _table(rows: list[dict[str, Any]], count: str) -> list[str]:
     return lines
 
 
+def _records(df: Any, family: str) -> list[dict[str, Any]]:
+    from workcell.experiments.analysis import measurements
+
+    head = ["family", "instance", "seed", "repetition", "load_average"]
+    rows: list[dict[str, Any]] = measurements(df, family).drop(columns=head).to_dict("records")
+    return rows
+
+
+def _nan(v: Any) -> bool:
+    return isinstance(v, float) and bool(np.isnan(v))
+
+
 def main(argv: list[str] | None = None) -> None:
+    """Run the sweep and write the tables and the plot.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        Command-line arguments (default: ``sys.argv``).
+    """
+    from workcell.experiments.analysis import measurements
+
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    ap.add_argument("--rounds", type=int, default=100_000)
-    ap.add_argument("--big", type=int, default=1_000_000)
-    ap.add_argument("--ticks", type=int, default=200)
-    ap.add_argument("--quick", action="store_true")
+    sweep_arguments(ap, fresh=True)
     args = ap.parse_args(argv)
-    stations = [2, 5, 10, 20, 40]
-    loads = [0.1, 0.25, 0.5, 0.75, 1.0]
-    ev_stations, ev_loads = [4, 10], [0.5, 1.0]
-    if args.quick:
-        args.rounds, args.big, args.ticks = 300, 2_000, 10
-        stations, loads = [2, 10], [0.25, 1.0]
-        ev_stations, ev_loads = [10], [1.0]
-    ethernet_rounds(10, seed=SEED)  # compile the numba kernel outside the timings
-    round_rows, tails = rounds_part(stations, loads, args.rounds, args.big)
-    variant_rows = variants_part(args.big)
-    event_rows, ev_tails = event_part(ev_stations, ev_loads, args.ticks)
-    tails.update(ev_tails)
-    span_rows, span_note = makespan_part(args.quick)
-    RESULTS.mkdir(exist_ok=True)
-    png = RESULTS / "network_tails.png"
+    out = output_dir(args.quick)
+    df = run_table_sweep(NAME, args, out)
+    m = measurements(df)
+    seed = int(m["seed"].iloc[0])
+    round_rows = _records(df, "rounds")
+    variant_rows = _records(df, "variants")
+    event_rows = _records(df, "event")
+    span = _records(df, "makespan")
+    span_note = span[0].get("note", "") if span else ""
+    span_rows = [
+        {k: v for k, v in r.items() if k != "note" and not _nan(v)}
+        for r in span
+        if "medium" in r and not _nan(r["medium"])
+    ]
+    tails = {f"{r['medium']} N=10 load {r['load']:g}": r["tail"] for r in round_rows if "tail" in r}
+    tails.update({f"{r['medium']} (event level)": r["tail"] for r in event_rows if "tail" in r})
+    png = out / "network_tails.png"
     plot(tails, dcr_bound(), png)
-
+    ticks = max((r["ticks"] for r in event_rows), default=0)
+    big_n = max(
+        (r["rounds"] for r in round_rows if r["stations"] == 10 and r["load"] == 1.0), default=0
+    )
+    rounds = min((r["rounds"] for r in round_rows), default=0)
     big = [r for r in round_rows if r["stations"] == 10 and r["load"] == 1.0]
     lines = [
         "# Network media: delays against the CSMA/DCR bound",
         "",
-        f"Command: `python -m benchmarks.bench_network{' --quick' if args.quick else ''}`; "
-        f"seed {SEED}. D_max = `workcell.dcr_bound(n_stations=N)` (100 m bus, 10 Mb/s, "
+        f"Seed {seed}. D_max = `workcell.dcr_bound(n_stations=N)` (100 m bus, 10 Mb/s, "
         "148-byte trajectory + 51-byte positions; 604.1 us at N = 10). Delays in "
         "microseconds from the frame's send to its last bit at the receiver; drops are "
         "frames given up after 16 attempts.",
         "",
-        f"## Contention rounds ({args.rounds:,} rounds per cell; {args.big:,} at N = 10, "
-        "full load)",
+        f"## Contention rounds ({rounds:,} rounds per cell; {big_n:,} at N = 10, full load)",
         "",
         *_table(round_rows, "rounds"),
         "",
@@ -359,7 +435,7 @@ def main(argv: list[str] | None = None) -> None:
         "",
         *_table(variant_rows, "rounds"),
         "",
-        f"## Event level (`make_medium`, {args.ticks} sampling periods of 1 ms)",
+        f"## Event level (`make_medium`, {ticks} sampling periods of 1 ms)",
         "",
         *_table(event_rows, "ticks"),
         "",
@@ -393,21 +469,23 @@ def main(argv: list[str] | None = None) -> None:
     if span_note:
         lines.append(f"Not run over the media: {span_note}.")
     lines += ["", f"Plot of the delay tails: `{png.name}`.", ""]
-    path = write(
-        "network",
-        {
-            "seed": SEED,
-            "rounds": round_rows,
-            "variants": variant_rows,
-            "event": event_rows,
-            "makespan": span_rows,
-            "makespan_note": span_note,
-            "plot": png.name,
-            "dcr_bound_us": dcr_bound() / US,
-        },
+    data = [{k: v for k, v in r.items() if k != "tail"} for r in m.to_dict("records")]
+    path = publish(
+        NAME,
+        df,
         "\n".join(lines),
+        out,
+        quick=args.quick,
+        rows=pd_frame(data),
+        extra={"plot": png.name, "dcr_bound_us": dcr_bound() / US},
     )
     print(path)
+
+
+def pd_frame(rows: list[dict[str, Any]]) -> Any:
+    import pandas as pd
+
+    return pd.DataFrame(rows)
 
 
 if __name__ == "__main__":

@@ -15,26 +15,30 @@ simple deterministic oracle attached:
 * **Python loop**: the previous decoder, a Python loop over tasks and modes
   with a dict cache (``scheduler.search.Evaluator``'s own blocking path), warm.
 
-The target is warm <= 2x no oracle. Results: ``benchmarks/results/oracle.json``
-and ``oracle.md``.
+The target is warm <= 2x no oracle. A thin wrapper of the sweep
+``benchmarks/sweeps/oracle.toml`` (one ``benchmark`` run of :func:`measure`
+per problem seed: every setting on that problem, side by side in one run);
+it measures again on every call. Results:
+``benchmarks/results/oracle.parquet``, ``.json`` and ``.md``.
 
-Run: ``python -m benchmarks.bench_oracle [--repeat 5] [--quick]``.
+Run: ``python -m benchmarks.bench_oracle [--quick]``.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import time
 from typing import Any
 
 import numpy as np
 
-from benchmarks.common import best_rate, write
+from benchmarks.common import best_rate, table_main
 from scheduler.generate import random_problem
 from scheduler.kernel import compiled, decode, warm_up
 from scheduler.problem import Problem
 from scheduler.search import Evaluator, priority_order
+
+NAME = "oracle"
 
 
 class HashOracle:
@@ -56,8 +60,12 @@ def _with_oracle(p: Problem) -> Problem:
     return dataclasses.replace(p, blocking=HashOracle())
 
 
-def measure(size: list[int], seed: int, repeat: int, python_loop: bool) -> dict[str, Any]:
-    """Decodes per second of one problem in each setting."""
+def measure(
+    seed: int, size: list[int] | tuple[int, ...], repeat: int, python_loop: bool = True
+) -> dict[str, Any]:
+    """Decodes per second of one problem in each setting (one row of the table)."""
+    kernel_load = warm_up()  # compile or load before any timing (once per process)
+    size = list(size)
     plain = random_problem(size[0], size[1], size[2], size[3], seed=seed)
     order = priority_order(plain)
     free = np.full(plain.n_tasks, -1, dtype=np.int64)
@@ -71,7 +79,8 @@ def measure(size: list[int], seed: int, repeat: int, python_loop: bool) -> dict[
 
         return go
 
-    row: dict[str, Any] = {"size": size, "seed": seed}
+    row: dict[str, Any] = {"size": size, "seed": seed, "repeat": repeat}
+    row["kernel_load_s"] = kernel_load
     row["plain"], _ = best_rate(run(lambda: decode(inst0, order, free), 20), repeat)
     row["plain_chrono"], _ = best_rate(
         run(lambda: decode(inst0, order, free, chrono=True), 20), repeat
@@ -110,54 +119,45 @@ def measure(size: list[int], seed: int, repeat: int, python_loop: bool) -> dict[
     return row
 
 
-def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args(argv)
-    size = [8, 200, 8, 2]
-    if args.quick:
-        size, args.seeds, args.repeat = [4, 40, 4, 1], [0], 2
-    t0 = time.perf_counter()
-    compile_s = warm_up()
-    rows = []
-    for seed in args.seeds:
-        rows.append(measure(size, seed, args.repeat, python_loop=True))
-        print(rows[-1], flush=True)
+def table(m: Any) -> str:
+    """The Markdown table of the measured rows."""
+    size = "x".join(map(str, m["size"].iloc[0])) if len(m) else "?"
     lines = [
         "# Decoding with a blocking oracle",
         "",
-        f"Full decodes per second (best of {args.repeat}), {'x'.join(map(str, size))} "
-        "(arms x tasks x zones x tools), `scheduler.generate.random_problem`, a deterministic "
-        "oracle (`HashOracle` in the script). Cold: a fresh answer table per decode (the oracle "
-        "is asked every answer the decode needs); warm: every answer known; Python loop: the "
-        "previous decoder (`Evaluator`'s own loop with a dict cache), warm. Target: warm within "
-        "2x of no oracle.",
+        f"Full decodes per second (best of {', '.join(map(str, sorted(set(m['repeat']))))}), "
+        f"{size} (arms x tasks x zones x tools), `scheduler.generate.random_problem`, a "
+        "deterministic oracle (`HashOracle` in the script). Cold: a fresh answer table per "
+        "decode (the oracle is asked every answer the decode needs); warm: every answer known; "
+        "Python loop: the previous decoder (`Evaluator`'s own loop with a dict cache), warm. "
+        "Target: warm within 2x of no oracle.",
         "",
         "| seed | no oracle /s | no oracle, chrono /s | cold /s (oracle calls) | warm /s | "
         "no oracle / warm | Python loop /s |",
         "|---|---|---|---|---|---|---|",
     ]
-    for r in rows:
+    for _, r in m.iterrows():
         lines.append(
             f"| {r['seed']} | {r['plain']:.1f} | {r['plain_chrono']:.1f} | {r['cold']:.1f} "
             f"({r['oracle_calls_cold']}) | {r['warm']:.1f} | {r['warm_over_plain']:.2f}x | "
             f"{r.get('python_loop', float('nan')):.2f} |"
         )
-    lines.append("")
-    lines.append(
-        f"Kernel compile or load before timing: {compile_s:.1f} s; whole run "
-        f"{time.perf_counter() - t0:.0f} s."
-    )
-    path = write(
-        "oracle",
-        {"seeds": args.seeds, "size": size, "repeat": args.repeat, "rows": rows},
-        "\n".join(lines) + "\n",
-    )
-    print(path.read_text())
+    lines += [
+        "",
+        f"Kernel compile or load before timing: {float(m['kernel_load_s'].sum()):.1f} s.",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the sweep and write the table.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        Command-line arguments (default: ``sys.argv``).
+    """
+    table_main(NAME, table, argv, __doc__, speed=True)
 
 
 if __name__ == "__main__":

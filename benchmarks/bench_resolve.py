@@ -10,47 +10,48 @@ distribution over many events. Results: ``benchmarks/results/resolve.json``
 and ``resolve.md``.
 
 Every event is re-solved twice, side by side in one run: with the budget
-under test (``--budget``, default 10 ms) and with the reference budget
-(``--reference-budget``, default 15 ms, the earlier default), in alternating
-order; reported for each: the latency distribution of the whole call and the
-mean makespan over the same events.
+under test (``budget``, 10 ms) and with the reference budget
+(``reference_budget``, 15 ms, the earlier default), in alternating order;
+reported for each: the latency distribution of the whole call and the mean
+makespan over the same events.
 
-Run: ``python -m benchmarks.bench_resolve [--events 300] [--budget 0.010]
-[--reference-budget 0.015] [--seed 0] [--quick]``.
+A thin wrapper of the sweep ``benchmarks/sweeps/resolve.toml`` (one
+``benchmark`` run of :func:`measure`: every event, both budgets); it
+measures again on every call. Results: ``benchmarks/results/resolve.parquet``,
+``.json`` and ``.md``.
+
+Run: ``python -m benchmarks.bench_resolve [--quick]``.
 """
 
 from __future__ import annotations
 
-import argparse
 import os
+from typing import Any
 
 import numpy as np
 
-from benchmarks.common import write
+from benchmarks.common import table_main
 from scheduler import solve, validate
 from scheduler.generate import random_problem
 from scheduler.online import CellState, reschedule
 
+NAME = "resolve"
 
-def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    ap.add_argument("--events", type=int, default=300)
-    ap.add_argument("--budget", type=float, default=0.010, help="reschedule time limit, seconds")
-    ap.add_argument(
-        "--reference-budget", type=float, default=0.015, help="the budget compared against"
-    )
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args(argv)
-    size = (8, 200, 8, 2)
-    if args.quick:
-        size, args.events = (4, 40, 4, 1), 10
+
+def measure(
+    seed: int,
+    size: list[int] | tuple[int, ...],
+    events: int,
+    budget: float,
+    reference_budget: float,
+    plan_limit: float,
+) -> dict[str, Any]:
+    """Every event re-solved with both budgets (the whole table, one run)."""
+    size = tuple(size)
     load = os.getloadavg()
-    rng = np.random.default_rng(args.seed)
-    p = random_problem(*size, seed=args.seed)
-    plan = solve(p, "tree", time_limit=2.0 if args.quick else 5.0, seed=args.seed).schedule
+    rng = np.random.default_rng(seed)
+    p = random_problem(size[0], size[1], size[2], size[3], seed=seed)
+    plan = solve(p, "tree", time_limit=plan_limit, seed=seed).schedule
     assert plan is not None
     reschedule(p, CellState(time=0.0), plan, time_limit=0.05)  # load the compiled kernel once
     first: list[float] = []
@@ -60,7 +61,7 @@ def main(argv: list[str] | None = None) -> None:
     ref_makespan: list[float] = []
     kinds: list[str] = []
     remaining: list[int] = []
-    for _ in range(args.events):
+    for _ in range(events):
         # early in the plan, so that most of the tasks remain (about 200 for the full size)
         now = float(rng.uniform(0.0, 0.1 * plan.makespan))
         done = {
@@ -89,12 +90,12 @@ def main(argv: list[str] | None = None) -> None:
                 t = int(rng.choice(running))
                 m, s, e, w = done[t]
                 state.done[t] = (m, s, e + float(rng.uniform(1, 10)), w)  # type: ignore[index]
-        seed = int(rng.integers(1 << 31))
-        runs = [("test", args.budget), ("ref", args.reference_budget)]
+        event_seed = int(rng.integers(1 << 31))
+        runs = [("test", budget), ("ref", reference_budget)]
         if len(kinds) % 2:
             runs.reverse()  # alternate which runs first
-        for which, budget in runs:
-            r = reschedule(p, state, plan, time_limit=budget, seed=seed)
+        for which, limit in runs:
+            r = reschedule(p, state, plan, time_limit=limit, seed=event_seed)
             assert r.schedule is not None and validate(p, r.schedule) == r.objective
             if which == "test":
                 first.append(r.stats.first_time)
@@ -105,53 +106,73 @@ def main(argv: list[str] | None = None) -> None:
                 ref_makespan.append(r.objective)
         kinds.append(kind)
         remaining.append(len(rest))
-    q = lambda xs, k: float(np.percentile(xs, k)) * 1e3  # noqa: E731
+    return {
+        "size": list(size),
+        "events": events,
+        "budget": budget,
+        "reference_budget": reference_budget,
+        "load_average_start": load[0],
+        "load_average_end": os.getloadavg()[0],
+        "first_ms": [x * 1e3 for x in first],
+        "total_ms": [x * 1e3 for x in total],
+        "makespan": makespan,
+        "ref_total_ms": [x * 1e3 for x in ref_total],
+        "ref_makespan": ref_makespan,
+        "kinds": kinds,
+        "remaining": remaining,
+    }
+
+
+def table(r: Any) -> str:
+    """The Markdown table of the one measured row."""
+    size, events, seed = r["size"], r["events"], r["seed"]
+    budget, ref_budget = r["budget"], r["reference_budget"]
+    first, total, ref_total = (np.asarray(r[k]) for k in ("first_ms", "total_ms", "ref_total_ms"))
+    makespan, ref_makespan = np.asarray(r["makespan"]), np.asarray(r["ref_makespan"])
+    remaining = r["remaining"]
+
+    def q(xs: Any, k: float) -> float:
+        return float(np.percentile(xs, k))
+
     lines = [
         f"# Re-solve latency: {size[0]} arms x {size[1]} tasks x {size[2]} zones",
         "",
-        f"{args.events} events (late part / arm failure / slow task), seed {args.seed}, budget {args.budget * 1e3:g} ms, "
-        f"{np.mean(remaining):.0f} tasks remaining on average (min {min(remaining)}).",
+        f"{events} events (late part / arm failure / slow task), seed {seed}, budget "
+        f"{budget * 1e3:g} ms, {np.mean(remaining):.0f} tasks remaining on average "
+        f"(min {min(remaining)}).",
         "",
         "| latency (ms) | p50 | p90 | p99 | max | mean makespan (s) |",
         "|---|---|---|---|---|---|",
         f"| first valid schedule | {q(first, 50):.2f} | {q(first, 90):.2f} | {q(first, 99):.2f} | "
-        f"{max(first) * 1e3:.2f} | |",
-        f"| whole call, budget {args.budget * 1e3:g} ms | {q(total, 50):.2f} | {q(total, 90):.2f} | "
-        f"{q(total, 99):.2f} | {max(total) * 1e3:.2f} | {np.mean(makespan):.2f} |",
-        f"| whole call, budget {args.reference_budget * 1e3:g} ms (reference) | {q(ref_total, 50):.2f} | "
-        f"{q(ref_total, 90):.2f} | {q(ref_total, 99):.2f} | {max(ref_total) * 1e3:.2f} | "
-        f"{np.mean(ref_makespan):.2f} |",
+        f"{first.max():.2f} | |",
+        f"| whole call, budget {budget * 1e3:g} ms | {q(total, 50):.2f} | {q(total, 90):.2f} | "
+        f"{q(total, 99):.2f} | {total.max():.2f} | {makespan.mean():.2f} |",
+        f"| whole call, budget {ref_budget * 1e3:g} ms (reference) | {q(ref_total, 50):.2f} | "
+        f"{q(ref_total, 90):.2f} | {q(ref_total, 99):.2f} | {ref_total.max():.2f} | "
+        f"{ref_makespan.mean():.2f} |",
         "",
-        f"Mean makespan ratio (budget / reference): {np.mean(makespan) / np.mean(ref_makespan):.4f}; "
-        f"events where the budget run is longer: {sum(a > b + 1e-9 for a, b in zip(makespan, ref_makespan, strict=True))}, "
-        f"shorter: {sum(a < b - 1e-9 for a, b in zip(makespan, ref_makespan, strict=True))}.",
+        f"Mean makespan ratio (budget / reference): {makespan.mean() / ref_makespan.mean():.4f}; "
+        f"events where the budget run is longer: {int(np.sum(makespan > ref_makespan + 1e-9))}, "
+        f"shorter: {int(np.sum(makespan < ref_makespan - 1e-9))}.",
         "",
         "Target: whole-call p99 <= 10 ms, mean makespan no worse than the reference's.",
         "",
-        f"Machine: {os.cpu_count()} CPUs, load average {load[0]:.1f} at the start and "
-        f"{os.getloadavg()[0]:.1f} at the end (the latencies are wall-clock: other work on "
+        f"Load average {r['load_average_start']:.1f} at the start and "
+        f"{r['load_average_end']:.1f} at the end (the latencies are wall-clock: other work on "
         "the machine lengthens them; the makespans compare the two budgets on the same events).",
     ]
-    path = write(
-        "resolve",
-        {
-            "size": size,
-            "events": args.events,
-            "budget": args.budget,
-            "reference_budget": args.reference_budget,
-            "load_average_start": load[0],
-            "makespan": makespan,
-            "ref_total_ms": [x * 1e3 for x in ref_total],
-            "ref_makespan": ref_makespan,
-            "seed": args.seed,
-            "first_ms": [x * 1e3 for x in first],
-            "total_ms": [x * 1e3 for x in total],
-            "kinds": kinds,
-            "remaining": remaining,
-        },
-        "\n".join(lines) + "\n",
-    )
-    print(path.read_text())
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the sweep and write the table.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        Command-line arguments (default: ``sys.argv``).
+    """
+    table_main(NAME, table, argv, __doc__, speed=True, one_row=True)
 
 
 if __name__ == "__main__":

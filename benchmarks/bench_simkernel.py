@@ -11,16 +11,18 @@ Two workloads, the same on both kernels, with the same seeded delays:
 * **processes** -- ``procs`` generator processes, each looping over
   ``yield <delay>`` (ours: a float; SimPy: ``env.timeout(delay)``).
 
-Each is run ``--repeat`` times, the two kernels interleaved, and the best
-rate (events per second) of each is kept; the ratio ours / SimPy is what to read (the machines are shared).
-Results: ``benchmarks/results/simkernel.json`` and ``simkernel.md``.
+Each is run ``repeat`` times, the two kernels interleaved, and the best
+rate (events per second) of each is kept; the ratio ours / SimPy is what to
+read (the machines are shared). A thin wrapper of the sweep
+``benchmarks/sweeps/simkernel.toml`` (one ``benchmark`` run of
+:func:`measure` per workload: both kernels in one run); it measures again on
+every call. Results: ``benchmarks/results/simkernel.parquet``, ``.json`` and ``.md``.
 
-Run: ``python -m benchmarks.bench_simkernel [--events 400000] [--quick]``.
+Run: ``python -m benchmarks.bench_simkernel [--quick]``.
 """
 
 from __future__ import annotations
 
-import argparse
 import time
 from collections.abc import Callable, Generator
 from functools import partial
@@ -29,19 +31,21 @@ from typing import Any
 import numpy as np
 import simpy
 
-from benchmarks.common import write
+from benchmarks.common import table_main
 from workcell.sim.kernel import Kernel
 
+NAME = "simkernel"
 SEED = 0
+"""The seed of the delays (the sweep passes it to :func:`measure`)."""
 
 
-def _delays(n: int) -> list[float]:
-    return [float(x) for x in np.random.default_rng(SEED).exponential(1e-3, size=n)]
+def _delays(n: int, seed: int = SEED) -> list[float]:
+    return [float(x) for x in np.random.default_rng(seed).exponential(1e-3, size=n)]
 
 
-def ours_callbacks(events: int, chains: int) -> int:
+def ours_callbacks(events: int, chains: int, seed: int = SEED) -> int:
     k = Kernel()
-    delays = _delays(events)
+    delays = _delays(events, seed)
     left = [events]
 
     def fire(i: int) -> None:
@@ -56,9 +60,9 @@ def ours_callbacks(events: int, chains: int) -> int:
     return k.events_run
 
 
-def simpy_callbacks(events: int, chains: int) -> int:
+def simpy_callbacks(events: int, chains: int, seed: int = SEED) -> int:
     env = simpy.Environment()
-    delays = _delays(events)
+    delays = _delays(events, seed)
     left = [events]
     count = [0]
 
@@ -75,9 +79,9 @@ def simpy_callbacks(events: int, chains: int) -> int:
     return count[0]
 
 
-def ours_processes(events: int, procs: int) -> int:
+def ours_processes(events: int, procs: int, seed: int = SEED) -> int:
     k = Kernel()
-    delays = _delays(events)
+    delays = _delays(events, seed)
     per = events // procs
     count = [0]
 
@@ -92,9 +96,9 @@ def ours_processes(events: int, procs: int) -> int:
     return count[0]
 
 
-def simpy_processes(events: int, procs: int) -> int:
+def simpy_processes(events: int, procs: int, seed: int = SEED) -> int:
     env = simpy.Environment()
-    delays = _delays(events)
+    delays = _delays(events, seed)
     per = events // procs
     count = [0]
 
@@ -119,64 +123,65 @@ def best(fn: Callable[[], int], repeat: int) -> tuple[float, int]:
     return max(rates), n
 
 
-def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    ap.add_argument("--events", type=int, default=400_000)
-    ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args(argv)
-    if args.quick:
-        args.events, args.repeat = 5_000, 1
-    rows: list[dict[str, Any]] = []
-    for workload, width, ours, theirs in (
-        ("callbacks", 1, ours_callbacks, simpy_callbacks),
-        ("callbacks", 100, ours_callbacks, simpy_callbacks),
-        ("processes", 10, ours_processes, simpy_processes),
-        ("processes", 1000, ours_processes, simpy_processes),
-    ):
-        r_ours = r_simpy = 0.0
-        n_ours = n_simpy = 0
-        for _ in range(args.repeat):  # interleaved, so both see the same load
-            rate, n_ours = best(partial(ours, args.events, width), 1)
-            r_ours = max(r_ours, rate)
-            rate, n_simpy = best(partial(theirs, args.events, width), 1)
-            r_simpy = max(r_simpy, rate)
-        rows.append(
-            {
-                "workload": workload,
-                "concurrent": width,
-                "events_ours": n_ours,
-                "events_simpy": n_simpy,
-                "ours_per_s": r_ours,
-                "simpy_per_s": r_simpy,
-                "ratio": r_ours / r_simpy,
-            }
-        )
-        print(rows[-1], flush=True)
+WORKLOADS = {
+    "callbacks": (ours_callbacks, simpy_callbacks),
+    "processes": (ours_processes, simpy_processes),
+}
+
+
+def measure(seed: int, workload: str, concurrent: int, events: int, repeat: int) -> dict[str, Any]:
+    """One row of the table: both kernels on one workload, ``repeat`` times interleaved."""
+    ours, theirs = WORKLOADS[workload]
+    r_ours = r_simpy = 0.0
+    n_ours = n_simpy = 0
+    for _ in range(repeat):  # interleaved, so both see the same load
+        rate, n_ours = best(partial(ours, events, concurrent, seed=seed), 1)
+        r_ours = max(r_ours, rate)
+        rate, n_simpy = best(partial(theirs, events, concurrent, seed=seed), 1)
+        r_simpy = max(r_simpy, rate)
+    return {
+        "workload": workload,
+        "concurrent": concurrent,
+        "events": events,
+        "repeat": repeat,
+        "events_ours": n_ours,
+        "events_simpy": n_simpy,
+        "ours_per_s": r_ours,
+        "simpy_per_s": r_simpy,
+        "ratio": r_ours / r_simpy,
+    }
+
+
+def table(m: Any) -> str:
+    """The Markdown table of the measured rows."""
     lines = [
         "# Event kernel vs SimPy",
         "",
-        f"SimPy {simpy.__version__}; {args.events} events per workload, best of "
-        f"{args.repeat}; seed {SEED} for the delays. Command: "
-        "`python -m benchmarks.bench_simkernel`. Events/s (best of the repeats); "
-        "only the ratio is meaningful on a shared machine.",
+        f"SimPy {simpy.__version__}; {', '.join(map(str, sorted(set(m['events']))))} events per "
+        f"workload, best of {', '.join(map(str, sorted(set(m['repeat']))))}; seed "
+        f"{', '.join(map(str, sorted(set(m['seed']))))} for the delays. Events/s (best of the "
+        "repeats); only the ratio is meaningful on a shared machine.",
         "",
         "| workload | concurrent | ours (events/s) | SimPy (events/s) | ratio |",
         "|---|---|---|---|---|",
     ]
-    for r in rows:
+    for _, r in m.iterrows():
         lines.append(
             f"| {r['workload']} | {r['concurrent']} | {r['ours_per_s']:,.0f} | "
             f"{r['simpy_per_s']:,.0f} | {r['ratio']:.2f} |"
         )
-    path = write(
-        "simkernel",
-        {"seed": SEED, "events": args.events, "repeat": args.repeat, "rows": rows},
-        "\n".join(lines) + "\n",
-    )
-    print(path)
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the sweep and write the table.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        Command-line arguments (default: ``sys.argv``).
+    """
+    table_main(NAME, table, argv, __doc__, speed=True)
 
 
 if __name__ == "__main__":

@@ -2,24 +2,34 @@
 requests per second, on one core (targets in the zones issue: 1e6 point-zone
 tests/s and 1e5 requests/s).
 
-Run: ``python -m benchmarks.bench_zones [--seed 0] [--quick]``.
+A thin wrapper of the sweep ``benchmarks/sweeps/zones.toml`` (one
+``benchmark`` run of :func:`measure` per example cell: its point queries and
+its requests, measured in one run); it measures again on every call.
+Results: ``benchmarks/results/zones.parquet``, ``.json`` and ``.md``.
+
+Run: ``python -m benchmarks.bench_zones [--quick]``.
 """
 
 from __future__ import annotations
 
-import argparse
+from typing import Any
 
 import numpy as np
 
-from benchmarks.common import best_rate, write
+from benchmarks.common import best_rate, table_main
 from zones import examples
 from zones.manager import ReportOnly, ZoneManager
 
+NAME = "zones"
 
-def point_queries(points: int, seed: int) -> list[dict[str, object]]:
+
+def point_queries(
+    points: int, seed: int, cells: tuple[str, ...] | None = None
+) -> list[dict[str, object]]:
+    """Point-zone tests per second, batched and one point per call, per example cell."""
     rows = []
     rng = np.random.default_rng(seed)
-    for name in examples.EXAMPLES:
+    for name in cells or examples.EXAMPLES:
         zm = examples.load_example(name)
         lo, hi = np.asarray(zm.bounds[0]), np.asarray(zm.bounds[1])
         pts = rng.uniform(lo, hi, size=(points, 3))
@@ -41,11 +51,13 @@ def point_queries(points: int, seed: int) -> list[dict[str, object]]:
     return rows
 
 
-def manager_requests(n_ops: int, seed: int) -> list[dict[str, object]]:
+def manager_requests(
+    n_ops: int, seed: int, cells: tuple[str, ...] | None = None
+) -> list[dict[str, object]]:
     """A random but legal workload: enter/leave/stop/move/tools, as a
     coordinator would issue them; every call counts as one request."""
     rows = []
-    for name in examples.EXAMPLES:
+    for name in cells or examples.EXAMPLES:
         zm = examples.load_example(name)
         arms = [f"arm{i}" for i in range(8)]
         rng = np.random.default_rng(seed)
@@ -101,32 +113,44 @@ def manager_requests(n_ops: int, seed: int) -> list[dict[str, object]]:
     return rows
 
 
-def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--quick", action="store_true", help="smaller sizes (smoke run)")
-    args = ap.parse_args(argv)
-    points = 2_000 if args.quick else 200_000
-    ops = 2_000 if args.quick else 100_000
-    q = point_queries(points, args.seed)
-    r = manager_requests(ops, args.seed)
+def measure(seed: int, cell: str, points: int, requests: int) -> dict[str, Any]:
+    """One row of the table: the point queries and the requests of one example cell."""
+    q = point_queries(points, seed, (cell,))[0]
+    r = manager_requests(requests, seed, (cell,))[0]
+    return {**q, "requests": requests, "requests_per_s": r["requests_per_s"]}
+
+
+def table(m: Any) -> str:
+    """The Markdown table of the measured rows."""
+    points = ", ".join(map(str, sorted(set(m["points"]))))
     lines = [
         "# Zone layer throughput",
         "",
-        f"seed {args.seed}; best of 5 (points) / 3 (requests) runs, one process, one core",
+        f"seed {', '.join(map(str, sorted(set(m['seed']))))}; best of 5 (points) / 3 (requests) "
+        "runs, one process, one core",
         "",
         f"| cell | zones | point-zone tests/s (batch of {points}) | tests/s (one point per call) "
         "| ZoneManager requests/s |",
         "|---|---|---|---|---|",
     ]
-    for a, b in zip(q, r, strict=True):
+    for _, a in m.iterrows():
         lines.append(
             f"| {a['cell']} | {a['zones']} | {a['point_zone_tests_per_s']:.3g} | "
-            f"{a['single_point_calls_tests_per_s']:.3g} | {b['requests_per_s']:.3g} |"
+            f"{a['single_point_calls_tests_per_s']:.3g} | {a['requests_per_s']:.3g} |"
         )
     lines += ["", "Targets: 1e6 point-zone tests/s, 1e5 requests/s."]
-    path = write("zones", {"seed": args.seed, "points": q, "requests": r}, "\n".join(lines) + "\n")
-    print(path.read_text())
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the sweep and write the table.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        Command-line arguments (default: ``sys.argv``).
+    """
+    table_main(NAME, table, argv, __doc__, speed=True)
 
 
 if __name__ == "__main__":

@@ -29,6 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_simkernel",
         "bench_network",
         "bench_sweep",
+        "bench_small",
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:

@@ -783,7 +783,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
     sweep = load_sweep(args.file)
     where = (
-        f"on {args.scheduler}" if args.scheduler else f"{args.workers or os.cpu_count()} processes"
+        f"on {args.scheduler}"
+        if args.scheduler
+        else f"{args.workers or sweep.workers or os.cpu_count()} processes"
     )
     print(f"sweep {sweep.name!r}: {len(sweep.runs())} runs, {where}", flush=True)
     try:

@@ -1,7 +1,8 @@
 """Experiments at scale: declarative sweeps, results with provenance, analysis plots.
 
 * :func:`load_sweep` reads a sweep file (TOML: instances x solver
-  configurations x seeds x repetitions); :func:`run_sweep` runs it in a local
+  configurations x seeds x repetitions, and ``benchmark`` instances: named
+  measurement functions whose rows are stored like solver runs); :func:`run_sweep` runs it in a local
   process pool or on a ``dask.distributed`` cluster, streaming results,
   resuming where an interrupted sweep stopped, recording failures
   (:mod:`workcell.experiments.sweep`).
@@ -16,11 +17,13 @@ The command ``multiarm sweep FILE [--scheduler ADDRESS] [--workers N]`` runs a s
 
 from workcell.experiments.results import COLUMNS, read_results, write_results
 from workcell.experiments.sweep import (
+    BENCHMARK,
     InstanceSpec,
     Run,
     SolverConfig,
     Sweep,
     SweepOutcome,
+    benchmark_function,
     build_problem,
     load_sweep,
     parse_sweep,
@@ -29,12 +32,14 @@ from workcell.experiments.sweep import (
 )
 
 __all__ = [
+    "BENCHMARK",
     "COLUMNS",
     "InstanceSpec",
     "Run",
     "SolverConfig",
     "Sweep",
     "SweepOutcome",
+    "benchmark_function",
     "build_problem",
     "load_sweep",
     "parse_sweep",

@@ -22,8 +22,11 @@ numbers behind it as a DataFrame.
   size (tasks, arms or zones): median and inter-quartile band per solver.
 * :func:`box_per_solver`: the distribution of a measure per solver.
 * :func:`fjsp_table`, :func:`generated_table`, :func:`small_table`,
-  :func:`cells_table`: the Markdown tables of ``benchmarks/results/`` from
-  the results of the sweep files in ``benchmarks/sweeps/``.
+  :func:`cells_table`, :func:`scale_table`: the Markdown tables of
+  ``benchmarks/results/`` from the results of the sweep files in
+  ``benchmarks/sweeps/``; :func:`sweep_note` says what ran, on what.
+* :func:`measurements`: the rows the ``benchmark`` runs of a sweep measured
+  (the speed tables), as one DataFrame.
 
 Examples
 --------
@@ -54,12 +57,15 @@ __all__ = [
     "gap_over_time_data",
     "generated_table",
     "incumbent_at",
+    "measurements",
     "performance_profile",
     "performance_profile_data",
     "reference",
+    "scale_table",
     "scaling",
     "scaling_data",
     "small_table",
+    "sweep_note",
     "time_to_target",
     "time_to_target_data",
     "with_gaps",
@@ -504,6 +510,10 @@ def _pct(x: float, sign: bool = False) -> str:
     return f"{100 * x:+.2f}%" if sign else f"{100 * x:.2f}%"
 
 
+def _gap1(x: float) -> str:
+    return f"{100 * x:.1f}%" if math.isfinite(x) else "-"
+
+
 def _one(df: Any, label: str) -> Any:
     sub = df[df["label"] == label]
     return sub.set_index(_INSTANCE)
@@ -772,4 +782,194 @@ def cells_table(df: Any, solvers: Sequence[str] = ("greedy", "tree", "cpsat")) -
             f"| {r['instance']} | {r['label']} | {r['status']} | {_fmt(float(r['makespan']), '.1f')} "
             f"| {float(r['lower_bound']):.1f} | {float(r['runtime']):.1f} |"
         )
+    return "\n".join(lines) + "\n"
+
+
+def scale_table(df: Any, *, first: str = "greedy", tree: str = "tree") -> str:
+    """The table of ``benchmarks/results/scale.md`` from the results of ``sweeps/scale.toml``.
+
+    The first schedule is the ``first`` (greedy) run: its ``runtime`` is the
+    time to the first valid schedule (compiling the problem for the kernel
+    and the lower bound included; loading the compiled kernel, once per
+    process, is not: it is ``warmup_time``, reported apart); the build time
+    is its ``build_time`` (the generator's).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+    first, tree : str
+        The solver labels of the sweep file.
+
+    Returns
+    -------
+    str
+        Markdown: per problem the build and first-schedule times, the
+        makespans, the lower bound and both gaps to it, the tree's evaluations.
+    """
+    need = [*_INSTANCE, "label", "makespan", "lower_bound", "runtime", "build_time"]
+    _need(df, [*need, "evaluations", "instance_params", "instance_seed"], "scale_table")
+    g, t = _one(df, first), _one(df, tree)
+    keys = sorted(g.index, key=lambda k: (k[0], int(g.loc[k]["instance_seed"])))
+    params = json.loads(str(g.loc[keys[0]]["instance_params"])) if keys else {}
+    size = " x ".join(f"{params.get(k, '?')} {k}" for k in ("arms", "tasks", "zones", "tools"))
+    tl = float(t["time_limit"].max()) if "time_limit" in t.columns else math.nan
+    load = float(df["warmup_time"].max()) if "warmup_time" in df.columns else math.nan
+    lines = [
+        f"# Scale: {size}",
+        "",
+        f"seeds {[int(g.loc[k]['instance_seed']) for k in keys]}; tree time limit {tl:g} s "
+        "(sweep `benchmarks/sweeps/scale.toml`); first schedule = the greedy run's runtime; "
+        f"kernel compile/cache load once per process: {_fmt(load, '.2f')} s (not in the "
+        "times below).",
+        "",
+        "| seed | build s | first schedule s | first makespan | tree makespan | lower bound "
+        "| first gap to LB | tree gap to LB | tree evaluations |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    firsts = []
+    for k in keys:
+        a, b = g.loc[k], t.loc[k]
+        lb = float(a["lower_bound"])
+        fm, tm = float(a["makespan"]), float(b["makespan"])
+        firsts.append(float(a["runtime"]))
+        lines.append(
+            f"| {int(a['instance_seed'])} | {float(a['build_time']):.2f} | "
+            f"{float(a['runtime']):.3f} | {_fmt(fm)} | {_fmt(tm)} | {lb:.1f} | "
+            f"{_gap1((fm - lb) / lb)} | {_gap1((tm - lb) / lb)} | {int(b['evaluations'])} |"
+        )
+    if firsts:
+        lines += [
+            "",
+            f"- first valid schedule: mean {float(np.mean(firsts)):.3f} s, "
+            f"max {float(np.max(firsts)):.3f} s (target: under 1 s)",
+        ]
+    return "\n".join(lines) + "\n"
+
+
+def measurements(df: Any, family: str | None = None) -> Any:
+    """The rows measured by the ``benchmark`` runs of a sweep, one DataFrame row each.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Results (:func:`~workcell.experiments.results.read_results`); rows
+        without measurements (solver runs, errors) are left out.
+    family : str, optional
+        Only the runs of this family (one table: its columns are exactly
+        the fields its rows measured).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``family``, ``instance``, ``seed``, ``repetition``, ``load_average``
+        of the run, then the measured fields, in the order of the sweep's
+        runs and of each run's rows.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> df = pd.DataFrame({"family": ["k"], "instance": ["a-s0"], "seed": [0],
+    ...     "repetition": [0], "status": ["measured"], "load_average": [0.5],
+    ...     "metrics": ['[{"n": 1, "rate": 2.5}, {"n": 2, "rate": 3.0}]']})
+    >>> measurements(df)[["instance", "n", "rate"]].to_dict("list")
+    {'instance': ['a-s0', 'a-s0'], 'n': [1, 2], 'rate': [2.5, 3.0]}
+    """
+    import pandas as pd
+
+    _need(df, ["family", "instance", "seed", "repetition", "status", "metrics"], "measurements")
+    out = []
+    keep = df["status"] == "measured"
+    if family is not None:
+        keep &= df["family"] == family
+    for _, r in df[keep].iterrows():
+        head = {
+            "family": r["family"],
+            "instance": r["instance"],
+            "seed": int(r["seed"]),
+            "repetition": int(r["repetition"]),
+            "load_average": float(r["load_average"]) if "load_average" in r else math.nan,
+        }
+        for m in json.loads(str(r["metrics"])):
+            out.append({**head, **m})
+    return pd.DataFrame(out)
+
+
+def sweep_note(df: Any, sweep_file: str | Sequence[str] = "", command: str = "") -> str:
+    """What ran, on what: the provenance line under a benchmark table.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Results of one sweep.
+    sweep_file : str or sequence of str
+        The sweep file (or files), as the reader should type it.
+    command : str
+        The command that reproduces the table.
+
+    Returns
+    -------
+    str
+        Markdown: the command and sweep file, the solver configurations
+        (label, solver, limit, options), the runs and failed runs, the
+        machine (CPUs, Python, platform), the package's git commit, when the
+        runs started and the load average meanwhile.
+    """
+    import datetime
+
+    lines = []
+    files = [sweep_file] if isinstance(sweep_file, str) else list(sweep_file)
+    files = [f for f in files if f]
+    if command or files:
+        sweeps = " and ".join(f"`{f}`" for f in files)
+        if command:
+            what = f"`{command}`" + (f" (sweep {sweeps})" if files else "")
+        else:
+            what = f"sweep {sweeps}"
+        lines.append(f"Reproduce: {what}.")
+    if "label" in df.columns and "solver" in df.columns:
+        cfg = []
+        cols = [c for c in ("label", "solver", "time_limit", "options") if c in df.columns]
+        for _, r in df[cols].drop_duplicates().iterrows():
+            if str(r["solver"]) == "benchmark":
+                continue
+            opts = json.loads(str(r.get("options", "{}")) or "{}")
+            limit = float(r.get("time_limit", math.nan))
+            parts = [f"{r['solver']}"]
+            parts.append(f"{limit:g} s" if math.isfinite(limit) else "work-limited")
+            parts += [f"{k}={v}" for k, v in sorted(opts.items())]
+            cfg.append(f"{r['label']} ({', '.join(parts)})")
+        if cfg:
+            lines.append("Solvers: " + "; ".join(cfg) + ".")
+    facts = [f"{len(df)} runs"]
+    if "status" in df.columns:
+        failed = int((df["status"] == "error").sum())
+        if failed:
+            facts.append(f"{failed} failed")
+    first = df.iloc[0] if len(df) else None
+    if first is not None:
+        for col, fmt in (("cpus", "{} CPUs"), ("python", "Python {}"), ("platform", "{}")):
+            if col in df.columns and str(first[col]) not in ("", "<NA>", "None"):
+                facts.append(fmt.format(first[col]))
+        if "git_commit" in df.columns:
+            commits = sorted(
+                {
+                    str(c)[:12] + ("+dirty" if str(c).endswith("+dirty") else "")
+                    for c in df["git_commit"].dropna()
+                    if str(c)
+                }
+            )
+            if commits:
+                facts.append("commit " + ", ".join(commits))
+    if "started" in df.columns:
+        st = df["started"].astype(float)
+        st = st[np.isfinite(st)]
+        if len(st):
+            day = datetime.datetime.fromtimestamp(float(st.min()), datetime.UTC)
+            facts.append(f"started {day:%Y-%m-%d %H:%M} UTC")
+    if "load_average" in df.columns:
+        la = df["load_average"].astype(float)
+        la = la[np.isfinite(la)]
+        if len(la):
+            facts.append(f"load average {float(la.min()):.1f}-{float(la.max()):.1f}")
+    lines.append("Ran: " + ", ".join(facts) + ".")
     return "\n".join(lines) + "\n"

@@ -46,6 +46,7 @@ import os
 import platform
 import socket
 import subprocess
+from collections.abc import Mapping
 from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
@@ -61,6 +62,7 @@ __all__ = [
     "COLUMNS",
     "DEPENDENCIES",
     "Journal",
+    "benchmark_row",
     "error_row",
     "provenance",
     "read_results",
@@ -99,6 +101,7 @@ COLUMNS: dict[str, str] = {
     "runtime": "float64",
     "wall_time": "float64",
     "build_time": "float64",
+    "warmup_time": "float64",
     "first_time": "float64",
     "best_time": "float64",
     "first_objective": "float64",
@@ -108,8 +111,10 @@ COLUMNS: dict[str, str] = {
     "evaluations": "int64",
     "error_type": "string",
     "error": "string",
+    "metrics": "string",
     # where it came from
     "started": "float64",
+    "load_average": "float64",
     "package_version": "string",
     "git_commit": "string",
     "dependencies": "string",
@@ -125,11 +130,17 @@ COLUMNS: dict[str, str] = {
 ``objective`` the solver's own; ``bound`` the solver's best proven bound;
 ``lower_bound`` :func:`scheduler.lower_bound`'s. Times are seconds:
 ``runtime`` the solver's, ``wall_time`` the whole run (building the problem
-included), ``build_time`` building it (0 when cached in the worker).
+included), ``build_time`` building it (0 when cached in the worker),
+``warmup_time`` loading the scheduler's compiled kernel before the
+solver's clock started (once per process, else 0).
 ``improvements`` is a JSON list of ``[seconds, makespan]`` pairs (each
 improved incumbent); ``options``, ``instance_params`` and ``dependencies``
 are JSON objects. ``status`` is a :class:`scheduler.SolveStatus` value or
-``"error"`` (then ``error_type`` and ``error`` say what happened)."""
+``"error"`` (then ``error_type`` and ``error`` say what happened) or, for a
+``benchmark`` run, ``"measured"``: then ``metrics`` holds what its
+measurement function returned (a JSON list of rows) and the solver columns
+are empty. ``load_average`` is the machine's one-minute load average when
+the run started (timed runs on a busy machine are slower)."""
 
 DEPENDENCIES = (
     "numpy",
@@ -231,6 +242,7 @@ def result_row(
     build_time: float,
     wall_time: float,
     started: float,
+    warmup_time: float = 0.0,
 ) -> dict[str, Any]:
     """The results row of a finished run.
 
@@ -246,6 +258,8 @@ def result_row(
     build_time, wall_time, started : float
         Seconds building the problem, seconds of the whole run, and the
         run's start (Unix time).
+    warmup_time : float
+        Seconds loading the compiled kernel before the solver's clock.
 
     Returns
     -------
@@ -267,6 +281,7 @@ def result_row(
         "runtime": float(result.runtime),
         "wall_time": float(wall_time),
         "build_time": float(build_time),
+        "warmup_time": float(warmup_time),
         "first_time": float(s.first_time),
         "best_time": float(s.best_time),
         "first_objective": float(s.first_objective),
@@ -276,9 +291,91 @@ def result_row(
         "evaluations": int(s.evaluations),
         "error_type": "",
         "error": "",
+        "metrics": "",
         "started": started,
+        "load_average": _load_average(),
         **provenance(),
     }
+
+
+def _load_average() -> float:
+    try:
+        return float(os.getloadavg()[0])
+    except (AttributeError, OSError):  # not on every platform
+        return math.nan
+
+
+def _plain(value: Any, where: str) -> Any:
+    """``value`` as JSON data (numpy scalars and arrays, tuples to lists); else a UsageError."""
+    if isinstance(value, bool | str) or value is None:
+        return value
+    if isinstance(value, int | float):
+        return value
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v, f"{where}.{k}") for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v, f"{where}[{i}]") for i, v in enumerate(value)]
+    tolist = getattr(value, "tolist", None)  # numpy scalars and arrays
+    if callable(tolist):
+        return _plain(tolist(), where)
+    raise UsageError(
+        f"{where}: a measurement must be numbers, strings, lists or dicts, got {value!r}"
+    )
+
+
+def benchmark_row(run: Run, measured: Any, *, wall_time: float, started: float) -> dict[str, Any]:
+    """The results row of a ``benchmark`` run (status ``"measured"``).
+
+    Parameters
+    ----------
+    run : Run
+    measured : dict or list of dict
+        What the measurement function returned: one row of a table, or
+        several.
+    wall_time, started : float
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    UsageError
+        ``measured`` is not a dict or a list of dicts of plain data.
+    """
+    rows = [measured] if isinstance(measured, Mapping) else measured
+    if not isinstance(rows, list | tuple) or not all(isinstance(r, Mapping) for r in rows):
+        raise UsageError(
+            f"benchmark {run.instance.source!r} must return a dict or a list of dicts, "
+            f"got {type(measured).__name__}"
+        )
+    nan = math.nan
+    row: dict[str, Any] = {c: None for c in COLUMNS}
+    row.update(_run_fields(run))
+    row.update(
+        {
+            "status": "measured",
+            "makespan": nan,
+            "objective": nan,
+            "bound": nan,
+            "lower_bound": nan,
+            "runtime": float(wall_time),
+            "wall_time": float(wall_time),
+            "build_time": 0.0,
+            "warmup_time": 0.0,
+            "first_time": nan,
+            "best_time": nan,
+            "first_objective": nan,
+            "improvements": "[]",
+            "error_type": "",
+            "error": "",
+            "metrics": json.dumps(_plain(list(rows), run.instance.source), allow_nan=True),
+            "started": started,
+            "load_average": _load_average(),
+            **provenance(),
+        }
+    )
+    return row
 
 
 def error_row(
@@ -317,7 +414,9 @@ def error_row(
             "improvements": "[]",
             "error_type": type(exc).__name__,
             "error": f"{exc}\n{detail}".strip(),
+            "metrics": "",
             "started": started,
+            "load_average": _load_average(),
             **provenance(),
         }
     )

@@ -40,6 +40,20 @@ Paths are relative to the sweep file::
     seeds = [0]                          # solver seeds; "instance" uses the problem's seed
     options = { workers = 2 }            # TreeOptions / GreedyOptions / CpSatOptions fields
 
+``[sweep] workers`` sets the local processes used when the caller names none
+(timed comparisons set 1). An optional ``[quick]`` table reduces the grid
+for a smoke run (:meth:`Sweep.quick_version`): ``instances`` (names or shell
+patterns to keep), ``solvers`` (labels to keep), ``time_limit`` (replaces
+every wall-clock limit), ``repetitions``, ``params`` (benchmark parameters).
+
+An instance of kind ``benchmark`` runs no solver: it names a measurement
+function, ``function = "module:function"`` (imported from ``path``,
+relative to the sweep file), with keyword arguments ``params`` (a table, or
+a list of tables: one instance each, named by their ``name``) and
+``seeds``; its run calls ``function(seed=..., **params)`` and stores the
+row (a dict) or rows (a list of dicts) it returns. A speed comparison is
+one such run, measuring every side of it in one process.
+
 A run without a wall-clock limit needs a work limit, so that it cannot hang
 and its result depends on the seed only: ``options.max_evaluations`` for
 ``tree``, ``options.max_deterministic_time`` (CP-SAT's deterministic time,
@@ -105,11 +119,13 @@ if TYPE_CHECKING:
     from scheduler import Problem, Result
 
 __all__ = [
+    "BENCHMARK",
     "InstanceSpec",
     "Run",
     "SolverConfig",
     "Sweep",
     "SweepOutcome",
+    "benchmark_function",
     "build_problem",
     "load_sweep",
     "parse_sweep",
@@ -117,14 +133,16 @@ __all__ = [
     "run_sweep",
 ]
 
-InstanceKind = Literal["fjsp", "generated", "cell"]
+InstanceKind = Literal["fjsp", "generated", "cell", "benchmark"]
 
 _TOML_POS = re.compile(r"\(at line (\d+), column (\d+)\)")
-_SWEEP_KEYS = {"name", "description", "out", "repetitions"}
+_SWEEP_KEYS = {"name", "description", "out", "repetitions", "workers"}
+_QUICK_KEYS = {"instances", "solvers", "time_limit", "params", "repetitions"}
 _INSTANCE_KEYS = {
     "fjsp": {"kind", "family", "files", "best_known"},
     "generated": {"kind", "family", "sizes", "seeds", "best_known"},
     "cell": {"kind", "family", "cells", "best_known"},
+    "benchmark": {"kind", "family", "function", "path", "params", "seeds"},
 }
 _GENERATOR_KEYS = {
     "precedence": float,
@@ -139,6 +157,9 @@ _GENERATOR_KEYS = {
 _SOLVER_KEYS = {"label", "solver", "time_limit", "seeds", "options"}
 _CPSAT_RUNNER_KEYS = {"max_deterministic_time"}
 """CP-SAT options the runner passes to ``scheduler.cpsat.solve_cpsat`` itself."""
+_FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
+BENCHMARK = "benchmark"
+"""The solver name of the runs of ``benchmark`` instances (which run no solver)."""
 
 
 # ------------------------------------------------------------------ records
@@ -150,23 +171,27 @@ class InstanceSpec:
 
     Attributes
     ----------
-    kind : {"fjsp", "generated", "cell"}
+    kind : {"fjsp", "generated", "cell", "benchmark"}
     family : str
         The label the sweep file gives (tables and plots group by it).
     name : str
-        ``mk01`` (file stem), ``2x8x2x1-s0`` (generated), ``scara4`` (cell).
+        ``mk01`` (file stem), ``2x8x2x1-s0`` (generated), ``scara4`` (cell),
+        the ``name`` of a benchmark's parameter table (with ``-s<seed>``).
     source : str
         The file (relative to the sweep file, or absolute), the built-in
-        cell's name, or ``""`` for generated problems.
+        cell's name, ``""`` for generated problems, ``module:function`` for
+        benchmarks.
     params : tuple of (str, object)
         Generated problems: ``arms``, ``tasks``, ``zones``, ``tools`` and the
-        generator's keywords, sorted by name.
+        generator's keywords; benchmarks: the function's keyword arguments
+        (lists as tuples); sorted by name.
     seed : int
-        The problem's seed (generated problems; 0 otherwise).
+        The problem's or the measurement's seed (0 for files and cells).
     best_known : float or None
         The reference of gaps given by the sweep file.
     base_dir : str
-        Directory that ``source`` is relative to.
+        Directory that ``source`` is relative to (for benchmarks: the
+        directory the function's module is imported from, ``""`` for none).
     """
 
     kind: InstanceKind
@@ -269,6 +294,12 @@ class Sweep:
     solvers : tuple of SolverConfig
     filename : str
         The sweep file (for messages).
+    workers : int or None
+        Local processes to use when the caller names none (``[sweep]
+        workers``; None: the CPU count). Timed comparisons set 1, so that
+        runs never share the machine with each other.
+    quick : tuple of (str, object)
+        The ``[quick]`` table: how :meth:`quick_version` reduces the grid.
     """
 
     name: str
@@ -278,9 +309,15 @@ class Sweep:
     instances: tuple[InstanceSpec, ...]
     solvers: tuple[SolverConfig, ...]
     filename: str = "<string>"
+    workers: int | None = None
+    quick: tuple[tuple[str, Any], ...] = ()
 
     def runs(self) -> list[Run]:
         """Every run of the grid, in a fixed order (instance, solver, seed, repetition).
+
+        A ``benchmark`` instance runs no solver: it gives one run per
+        repetition (its seed plus the repetition), under the solver
+        configuration ``benchmark``.
 
         Returns
         -------
@@ -288,12 +325,92 @@ class Sweep:
         """
         out = []
         for inst in self.instances:
+            if inst.kind == "benchmark":
+                cfg = SolverConfig(BENCHMARK, BENCHMARK, None, (), ("instance",))
+                for rep in range(self.repetitions):
+                    out.append(Run(self.name, inst, cfg, inst.seed + rep, rep))
+                continue
             for cfg in self.solvers:
                 for s in cfg.seeds:
                     base = inst.seed if s == "instance" else int(s)
                     for rep in range(self.repetitions):
                         out.append(Run(self.name, inst, cfg, base + rep, rep))
         return out
+
+    def quick_version(self) -> Sweep:
+        """The reduced grid of the sweep file's ``[quick]`` table (a smoke run).
+
+        ``[quick]`` may keep only some instances (``instances``: names or
+        shell patterns) and solver configurations (``solvers``: labels),
+        replace every wall-clock limit (``time_limit``), replace benchmark
+        parameters (``params``: each applies to the benchmarks that have a
+        parameter of that name) and set ``repetitions``. Without
+        a ``[quick]`` table the sweep is returned unchanged.
+
+        Returns
+        -------
+        Sweep
+            Same name and output file; its runs have their own keys (their
+            limits differ), so they never pass for runs of the full grid.
+
+        Examples
+        --------
+        >>> s = parse_sweep('''
+        ... [sweep]
+        ... name = "q"
+        ... [quick]
+        ... instances = ["2x6x2x1-s0"]
+        ... time_limit = 0.5
+        ... [[instances]]
+        ... kind = "generated"
+        ... sizes = [[2, 6, 2, 1]]
+        ... seeds = [0, 1]
+        ... [[solvers]]
+        ... solver = "tree"
+        ... time_limit = 10.0
+        ... ''')
+        >>> [(r.instance.name, r.config.time_limit) for r in s.quick_version().runs()]
+        [('2x6x2x1-s0', 0.5)]
+        """
+        from dataclasses import replace
+        from fnmatch import fnmatchcase
+
+        q = dict(self.quick)
+        if not q:
+            return self
+        instances = self.instances
+        if "instances" in q:
+            instances = tuple(
+                i for i in instances if any(fnmatchcase(i.name, pat) for pat in q["instances"])
+            )
+        if "params" in q:
+            extra = dict(q["params"])
+            instances = tuple(
+                replace(
+                    i,
+                    params=tuple(
+                        sorted((k, extra.get(k, v)) for k, v in i.params)  # only keys it has
+                    ),
+                )
+                if i.kind == "benchmark"
+                else i
+                for i in instances
+            )
+        solvers = self.solvers
+        if "solvers" in q:
+            solvers = tuple(c for c in solvers if c.label in q["solvers"])
+        if "time_limit" in q:
+            solvers = tuple(
+                replace(c, time_limit=q["time_limit"]) if c.time_limit is not None else c
+                for c in solvers
+            )
+        return replace(
+            self,
+            instances=instances,
+            solvers=solvers,
+            repetitions=int(q.get("repetitions", self.repetitions)),
+            quick=(),
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -311,6 +428,9 @@ class SweepOutcome:
         status ``"error"``.
     wall_time : float
         Seconds this call took.
+    keys : frozenset of str
+        The keys of the sweep's runs (its results file may also hold runs of
+        an earlier version of the sweep file).
     """
 
     out: Path
@@ -319,17 +439,32 @@ class SweepOutcome:
     skipped: int
     failed: int
     wall_time: float
+    keys: frozenset[str] = frozenset()
 
     @property
     def runs_per_minute(self) -> float:
         """Throughput of this call (runs executed per minute of wall clock)."""
         return 60.0 * self.ran / self.wall_time if self.wall_time > 0 else math.inf
 
-    def results(self) -> Any:
-        """Every recorded run as a pandas DataFrame (:func:`~workcell.experiments.results.read_results`)."""
+    def results(self, current: bool = False) -> Any:
+        """Every recorded run as a pandas DataFrame (:func:`~workcell.experiments.results.read_results`).
+
+        Parameters
+        ----------
+        current : bool
+            Only the runs of the sweep as it was run now (leaving out rows of
+            an earlier grid kept in the same results file).
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
         from workcell.experiments.results import read_results
 
-        return read_results(self.out)
+        df = read_results(self.out)
+        if current:
+            df = df[df["key"].isin(self.keys)].reset_index(drop=True)
+        return df
 
 
 # ------------------------------------------------------------------ parsing
@@ -475,7 +610,7 @@ def sweep_from_dict(
     """
     w = _Where(filename)
     base = Path(base_dir) if base_dir is not None else Path(".")
-    _unknown(w, data, {"sweep", "instances", "solvers"}, "")
+    _unknown(w, data, {"sweep", "instances", "solvers", "quick"}, "")
     head = _table(w, data.get("sweep", {}), "sweep")
     _unknown(w, head, _SWEEP_KEYS, "sweep")
     stem = Path(filename).stem if filename != "<string>" else "sweep"
@@ -488,13 +623,14 @@ def sweep_from_dict(
     if not out.is_absolute():
         out = base / out
     repetitions = _int(w, head.get("repetitions", 1), "sweep.repetitions", least=1)
+    workers = _int(w, head["workers"], "sweep.workers", least=1) if "workers" in head else None
     if "instances" not in data:
         raise w.fail("instances", "missing: at least one [[instances]] table")
-    if "solvers" not in data:
-        raise w.fail("solvers", "missing: at least one [[solvers]] table")
     instances: list[InstanceSpec] = []
     for i, item in enumerate(_list(w, data["instances"], "instances")):
         instances += _instances(w, _table(w, item, f"instances[{i}]"), f"instances[{i}]", base)
+    if "solvers" not in data and any(i.kind != "benchmark" for i in instances):
+        raise w.fail("solvers", "missing: at least one [[solvers]] table")
     seen: dict[tuple[str, str], str] = {}
     for inst in instances:
         k = (inst.family, inst.name)
@@ -506,14 +642,123 @@ def sweep_from_dict(
             )
         seen[k] = inst.source
     solvers: list[SolverConfig] = []
-    for i, item in enumerate(_list(w, data["solvers"], "solvers")):
+    for i, item in enumerate(_list(w, data["solvers"], "solvers") if "solvers" in data else []):
         solvers += _solvers(w, _table(w, item, f"solvers[{i}]"), f"solvers[{i}]")
     labels: set[tuple[str, float | None]] = set()
     for cfg in solvers:
         if (cfg.label, cfg.time_limit) in labels:
             raise w.fail("solvers", f"label {cfg.label!r} is used twice: give each a unique label")
         labels.add((cfg.label, cfg.time_limit))
-    return Sweep(name, description, out, repetitions, tuple(instances), tuple(solvers), filename)
+    quick = _quick(w, data.get("quick", {}), instances, solvers)
+    return Sweep(
+        name,
+        description,
+        out,
+        repetitions,
+        tuple(instances),
+        tuple(solvers),
+        filename,
+        workers,
+        quick,
+    )
+
+
+def _quick(
+    w: _Where, value: Any, instances: Sequence[InstanceSpec], solvers: Sequence[SolverConfig]
+) -> tuple[tuple[str, Any], ...]:
+    from fnmatch import fnmatchcase
+
+    q = _table(w, value, "quick")
+    _unknown(w, q, _QUICK_KEYS, "quick")
+    out: dict[str, Any] = {}
+    if "instances" in q:
+        pats = [
+            _str(w, v, f"quick.instances[{j}]")
+            for j, v in enumerate(_list(w, q["instances"], "quick.instances"))
+        ]
+        for j, pat in enumerate(pats):
+            if not any(fnmatchcase(i.name, pat) for i in instances):
+                raise w.fail(f"quick.instances[{j}]", f"{pat!r} matches no instance")
+        out["instances"] = tuple(pats)
+    if "solvers" in q:
+        labels = [
+            _str(w, v, f"quick.solvers[{j}]")
+            for j, v in enumerate(_list(w, q["solvers"], "quick.solvers"))
+        ]
+        known = {c.label for c in solvers}
+        for j, lab in enumerate(labels):
+            if lab not in known:
+                raise w.fail(
+                    f"quick.solvers[{j}]",
+                    f"no solver configuration is labelled {lab!r} "
+                    f"(labels: {', '.join(sorted(known))})",
+                )
+        out["solvers"] = tuple(labels)
+    if "time_limit" in q:
+        out["time_limit"] = _number(w, q["time_limit"], "quick.time_limit")
+    if "repetitions" in q:
+        out["repetitions"] = _int(w, q["repetitions"], "quick.repetitions", least=1)
+    if "params" in q:
+        params = _table(w, q["params"], "quick.params")
+        have = {k for i in instances if i.kind == "benchmark" for k, _ in i.params}
+        for k in params:
+            if k not in have:
+                raise w.fail(f"quick.params.{k}", "no benchmark instance has this parameter")
+        out["params"] = tuple(
+            sorted((k, _param(w, v, f"quick.params.{k}")) for k, v in params.items())
+        )
+    return tuple(sorted(out.items()))
+
+
+def _param(w: _Where, value: Any, where: str) -> Any:
+    """A benchmark parameter: a number, string or boolean, or a list of them (as a tuple)."""
+    if isinstance(value, list):
+        return tuple(_param(w, v, f"{where}[{j}]") for j, v in enumerate(value))
+    if isinstance(value, bool | int | str) or (isinstance(value, float) and math.isfinite(value)):
+        return value
+    raise w.fail(where, f"expected a number, string, boolean or list of them, got {value!r}")
+
+
+def _import_path(path: str) -> None:
+    """Make ``path`` importable (benchmark functions live beside the sweep file)."""
+    import sys
+
+    if path and path not in sys.path:
+        sys.path.insert(0, path)
+
+
+def benchmark_function(instance: InstanceSpec) -> Callable[..., Any]:
+    """The measurement function of a ``benchmark`` instance (imported by name).
+
+    Parameters
+    ----------
+    instance : InstanceSpec
+        Of kind ``benchmark``: ``source`` is ``module:function`` and
+        ``base_dir`` the directory the module is imported from.
+
+    Returns
+    -------
+    callable
+
+    Raises
+    ------
+    UsageError
+        The module cannot be imported or has no such function.
+    """
+    import importlib
+
+    module, _, attr = instance.source.partition(":")
+    _import_path(instance.base_dir)
+    try:
+        mod = importlib.import_module(module)
+    except ImportError as exc:
+        raise UsageError(
+            f"benchmark {instance.source!r}: cannot import {module!r}: {exc}"
+        ) from None
+    fn = getattr(mod, attr, None)
+    if not callable(fn):
+        raise UsageError(f"benchmark {instance.source!r}: {module!r} has no function {attr!r}")
+    return fn  # type: ignore[no-any-return]
 
 
 def _best_known(w: _Where, item: Mapping[str, Any], where: str) -> dict[str, float]:
@@ -599,6 +844,8 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
                         best_known=bk.get(name, bk.get(label)),
                     )
                 )
+    elif kind == "benchmark":
+        out += _benchmarks(w, item, where, base, family)
     else:
         from workcell.cell import EXAMPLES
 
@@ -623,6 +870,53 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
                     source=c,
                     best_known=bk.get(p.stem),
                     base_dir=fspath(base),
+                )
+            )
+    return out
+
+
+def _benchmarks(
+    w: _Where, item: Mapping[str, Any], where: str, base: Path, family: str
+) -> list[InstanceSpec]:
+    fn = _str(w, item.get("function"), f"{where}.function")
+    if not _FUNCTION.match(fn):
+        raise w.fail(f"{where}.function", f"expected 'module:function', got {fn!r}")
+    path = ""
+    if "path" in item:
+        p = Path(_str(w, item["path"], f"{where}.path"))
+        full = p if p.is_absolute() else base / p
+        if not full.is_dir():
+            raise w.fail(f"{where}.path", f"{fspath(p)!r} is not a directory (looked for {full})")
+        path = fspath(full.resolve())
+    probe = InstanceSpec("benchmark", family, "", source=fn, base_dir=path)
+    try:
+        benchmark_function(probe)
+    except UsageError as exc:
+        raise w.fail(f"{where}.function", str(exc)) from None
+    raw = item.get("params", [{}])
+    tables = [raw] if isinstance(raw, Mapping) else _list(w, raw, f"{where}.params")
+    seeds = [
+        _int(w, s, f"{where}.seeds[{j}]")
+        for j, s in enumerate(_list(w, item.get("seeds", [0]), f"{where}.seeds"))
+    ]
+    out = []
+    for j, t in enumerate(tables):
+        pw = f"{where}.params" if isinstance(raw, Mapping) else f"{where}.params[{j}]"
+        params = dict(_table(w, t, pw))
+        label = _str(w, params.pop("name", family if len(tables) == 1 else f"{family}{j}"), pw)
+        if "seed" in params:
+            raise w.fail(f"{pw}.seed", "the seed comes from the seeds field, not the parameters")
+        values = {k: _param(w, v, f"{pw}.{k}") for k, v in params.items()}
+        for s in seeds:
+            out.append(
+                InstanceSpec(
+                    "benchmark",
+                    family,
+                    f"{label}-s{s}",
+                    source=fn,
+                    params=tuple(sorted(values.items())),
+                    seed=s,
+                    base_dir=path,
                 )
             )
     return out
@@ -768,6 +1062,13 @@ def run_one(run: Run) -> dict[str, Any]:
     The problem is built (cached per process), solved, and the schedule
     checked by :func:`scheduler.validate`, whose makespan is recorded; any
     exception is recorded as status ``"error"`` with its type and message.
+    The scheduler's compiled kernel is loaded before the solver's clock
+    starts (the seconds it took, once per process, go to ``warmup_time``).
+
+    A ``benchmark`` run calls its measurement function with
+    ``seed=run.seed`` and the instance's parameters; what it returns (one
+    dict, or a list of dicts: rows of a table) is recorded as JSON in the
+    ``metrics`` column, with status ``"measured"``.
 
     Parameters
     ----------
@@ -778,13 +1079,19 @@ def run_one(run: Run) -> dict[str, Any]:
     dict
         One row (:data:`workcell.experiments.results.COLUMNS`).
     """
-    from workcell.experiments.results import error_row, result_row
+    from workcell.experiments.results import benchmark_row, error_row, result_row
 
     t0 = time.perf_counter()
     started = time.time()
     try:
+        if run.instance.kind == "benchmark":
+            fn = benchmark_function(run.instance)
+            t0 = time.perf_counter()
+            measured = fn(seed=run.seed, **dict(run.instance.params))
+            return benchmark_row(run, measured, wall_time=time.perf_counter() - t0, started=started)
         problem = build_problem(run.instance)
         build = time.perf_counter() - t0
+        warmup = _warm_up()
         result = _solve(problem, run.config, run.seed)
         if result.stats.interrupted:  # Ctrl-C cut the search short: not a result to keep
             raise KeyboardInterrupt
@@ -800,6 +1107,7 @@ def run_one(run: Run) -> dict[str, Any]:
             build_time=build,
             wall_time=time.perf_counter() - t0,
             started=started,
+            warmup_time=warmup,
         )
     except Exception as exc:  # recorded, never lost: the sweep goes on
         return error_row(
@@ -809,6 +1117,13 @@ def run_one(run: Run) -> dict[str, Any]:
             wall_time=time.perf_counter() - t0,
             started=started,
         )
+
+
+def _warm_up() -> float:
+    """Load the scheduler's compiled kernel before a solver's clock starts (seconds taken)."""
+    from scheduler.kernel import warm_up
+
+    return float(warm_up(announce=lambda _msg: None))
 
 
 def _progress_bar(total: int, initial: int, enabled: bool, desc: str) -> Any:
@@ -921,8 +1236,9 @@ def run_sweep(
         A Dask scheduler's address (``"tcp://host:8786"``) or a connected
         client: run on that cluster. ``None`` (default): a local process pool.
     workers : int or None
-        Local processes (default: the CPU count; 1 runs in this process).
-        Ignored on a cluster, which has its own workers.
+        Local processes (default: the sweep file's ``workers``, else the CPU
+        count; 1 runs in this process). Ignored on a cluster, which has its
+        own workers.
     out : str or path-like, optional
         The results file (default: the sweep file's ``out``).
     progress : bool
@@ -948,7 +1264,7 @@ def run_sweep(
     t0 = time.perf_counter()
     spec = sweep if isinstance(sweep, Sweep) else load_sweep(sweep)
     if workers is None:
-        workers = os.cpu_count() or 1
+        workers = spec.workers or os.cpu_count() or 1
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise UsageError(f"workers must be an int >= 1, got {workers!r}")
     path = Path(out) if out is not None else spec.out
@@ -977,4 +1293,12 @@ def run_sweep(
         if bar is not None:
             bar.close()
         journal.consolidate()
-    return SweepOutcome(path, len(runs), ran, skipped, failed, time.perf_counter() - t0)
+    return SweepOutcome(
+        path,
+        len(runs),
+        ran,
+        skipped,
+        failed,
+        time.perf_counter() - t0,
+        frozenset(r.key for r in runs),
+    )
