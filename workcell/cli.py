@@ -695,6 +695,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             medium=args.network,
             tick=args.tick,
             monitor=not args.no_monitor,
+            insertion=args.insertion,
         )
         bar.update(1)
         bar.set_postfix_str("plots")
@@ -860,6 +861,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         metavar="SECONDS",
         help="model every controller tick of this period (default: event level)",
+    )
+    p.add_argument(
+        "--insertion",
+        choices=["planned", "drawn"],
+        default="planned",
+        help="force-guided insertions: the planned tries, or tries drawn at run time (S1.7)",
     )
     p.add_argument("--out", metavar="DIR", help="output directory (default ./out/CELLNAME)")
     p.add_argument("--frames", type=int, default=0, metavar="N", help="also write N motion frames")

@@ -258,3 +258,22 @@ def test_simulate_with_a_work_limit_is_reproducible(
         runs.append(json.loads((out / "schedule.json").read_text()))
     assert runs[0] == runs[1]
     assert _same_but_wall(tmp_path / "0" / "metrics.json", tmp_path / "1" / "metrics.json")
+
+
+def test_simulate_draws_insertion_tries_when_asked(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    kinds = {}
+    for how in ("planned", "drawn"):
+        out = tmp_path / how
+        args = ["simulate", "supersigma", "--solver", "greedy", "--seed", "1"]
+        assert main([*args, "--insertion", how, "--out", str(out)]) == 0
+        trace = json.loads((out / "trace.json").read_text())
+        kinds[how] = {e["kind"] for e in trace["events"]}
+    capsys.readouterr()
+    assert "force" not in kinds["planned"]
+    assert "force" in kinds["drawn"]
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "supersigma", "--insertion", "worst"])
+    assert exc.value.code == 2
+    assert "argument --insertion: invalid choice: 'worst'" in capsys.readouterr().err

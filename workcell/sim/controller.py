@@ -40,6 +40,22 @@ Motion between events follows the compiled trajectories exactly (closed-form
 drive profiles, never a stepper pulse per event). Stops are modelled as
 pauses of the trajectory clock at the stopping point.
 
+Force sensing (S1.7, S1.2)
+--------------------------
+Each controller has the arm's wrist force sensor
+(:class:`~workcell.sim.force.ForceSensor`) and its two commands,
+:meth:`ArmController.read_force` and :meth:`ArmController.set_thresholds`.
+A crash above the threshold in force stops the motors at once (``STOP_D``,
+the reflex arc) and is reported to the coordinator afterwards
+(:meth:`ArmController.sense_crash`). With drawn insertion tries
+(:attr:`ArmController.searches`) a task leg carries its searches as marks
+on its clock (:data:`Mark`): the thresholds are raised at the start of a
+search dwell, each try ends with a force reading, and the free thresholds
+come back after the last; extra tries are made while the clock stands (a
+stop with reason ``"search"``), and when fewer tries than planned are
+needed the rest of the dwell is skipped. The leg keeps the compiled
+offsets, so the zone windows of the compiled mode stay valid.
+
 Examples
 --------
 >>> from workcell.arms.profiles import StepperDrive
@@ -60,6 +76,7 @@ from multiarm.errors import ValidationError
 from multiarm.types import FloatArray, JointVector
 from workcell.arms import DriveArm, JointTrajectory
 from workcell.arms.profiles import Drive, ServoDrive, StepperDrive
+from workcell.sim.force import CRASH_AXIS, CRASH_FORCE, FREE_THRESHOLD, ForceSensor, InsertSearch
 from workcell.sim.kernel import Handle, Kernel
 from workcell.sim.trace import Trace
 
@@ -67,6 +84,7 @@ __all__ = [
     "INTERNAL_MESSAGES",
     "ArmController",
     "Leg",
+    "Mark",
     "Piece",
     "Station",
     "Ticker",
@@ -83,6 +101,14 @@ INTERNAL_MESSAGES: tuple[str, ...] = (
     "CONTINUE",
 )
 """The six messages between an arm's two processors (S2.3)."""
+
+Mark = tuple[float, str, int, int]
+"""A force-search event on a task leg's clock: ``(tau, action, search, try)``
+with action ``"raise"`` (the thresholds, at the start of the search dwell)
+or ``"try"`` (the end of try ``try``, 1-based)."""
+
+_EPS = 1e-9
+"""Seconds: marks this close to a station belong to it."""
 
 Piece = tuple[str, int, int, float]
 """One use of a resource by a task: ``(kind, index, task, tau)`` with kind
@@ -133,6 +159,25 @@ def pipeline_offset(drives: Sequence[Drive], period: float) -> int:
     return max(1, math.ceil(t / period - 1e-9))
 
 
+def _marks(searches: Sequence[InsertSearch]) -> list[Mark]:
+    """The events of ``searches`` on the task leg's clock (compiled offsets).
+
+    A search raises the thresholds at the start of its dwell. When it needs
+    more tries than planned, the first extra ones are made there while the
+    clock stands (:meth:`ArmController._extra_try`); the planned dwell then
+    holds the last ``min(tries, planned)`` tries, one mark at the end of each.
+    When it needs fewer, the clock skips the rest of the dwell after the last.
+    """
+    out: list[Mark] = []
+    for si, s in enumerate(searches):
+        T = s.search.try_time
+        out.append((s.start, "raise", si, 0))
+        base = max(0, s.tries - s.planned)
+        for j in range(1, min(s.tries, s.planned) + 1):
+            out.append((s.start + j * T, "try", si, base + j))
+    return out
+
+
 @dataclass(slots=True)
 class Station:
     """A point of a leg where something happens.
@@ -179,6 +224,13 @@ class Leg:
     trajectory : JointTrajectory
     stations : list of Station
         Sorted by ``tau``; the last one is the end.
+    searches : tuple of InsertSearch
+        The force-guided searches of a task leg whose insertion tries are
+        drawn (:mod:`workcell.sim.force`); empty otherwise.
+    marks : list of Mark, or None
+        The searches' events on the leg's clock (built when the leg starts).
+    fired : int
+        Marks done.
     """
 
     kind: str
@@ -186,6 +238,9 @@ class Leg:
     mode: int
     trajectory: JointTrajectory
     stations: list[Station]
+    searches: tuple[InsertSearch, ...] = ()
+    marks: list[Mark] | None = None
+    fired: int = 0
 
     @property
     def duration(self) -> float:
@@ -255,6 +310,17 @@ class ArmController:
     ticker : Ticker, optional
         The shared tick driver when every controller tick is modelled
         (``simulate(..., tick=...)``); ``None`` at event level.
+    force_threshold : float
+        The wrist force sensor's free-motion threshold, newtons (S1.7).
+
+    Attributes
+    ----------
+    sensor : ForceSensor
+        The wrist force sensor (:mod:`workcell.sim.force`).
+    searches : dict of int -> tuple of InsertSearch
+        Per compiled mode, its insert steps' searches with the tries drawn
+        (set by :func:`~workcell.sim.run.simulate` with
+        ``insertion="drawn"``; empty: every insertion takes its planned time).
     """
 
     def __init__(
@@ -267,6 +333,7 @@ class ArmController:
         trace: Trace,
         period: float,
         ticker: Ticker | None = None,
+        force_threshold: float = FREE_THRESHOLD,
     ) -> None:
         self.kernel = kernel
         self.index = index
@@ -320,6 +387,14 @@ class ArmController:
         # hooks set by the coordinator side
         self.on_task_start: Callable[[int, int, float], None] = lambda a, t, now: None
         self.on_task_end: Callable[[int, int, float], None] = lambda a, t, now: None
+        # wrist force sensing and force-guided insertion (S1.7)
+        self.sensor = ForceSensor(force_threshold)
+        self.searches: dict[int, tuple[InsertSearch, ...]] = {}
+        self.pushing = False  # thresholds raised for a search
+        self._mark_h: Handle | None = None
+        self._extra: list[Any] | None = None  # [leg, search, next try, last try, seconds left]
+        self._extra_h: Handle | None = None
+        self._extra_due = 0.0
 
     # ------------------------------------------------------------ helpers
     def internal(self, message: str, task: int = -1, detail: str = "") -> None:
@@ -380,14 +455,20 @@ class ArmController:
         self._seg_t0 = now
 
     def _cancel(self) -> None:
-        for h in (self._arrive_h, self._request_h, self._resume_h):
+        for h in (self._arrive_h, self._request_h, self._resume_h, self._mark_h):
             if h is not None:
                 h.cancel()
-        self._arrive_h = self._request_h = self._resume_h = None
+        self._arrive_h = self._request_h = self._resume_h = self._mark_h = None
 
     # ------------------------------------------------------------ motion
     def _pause(self, reason: str) -> None:
         """Stop the trajectory clock now (an unplanned stop)."""
+        if reason != "search" and self._extra_h is not None:
+            # the pushes of a search stop too; they go on when only it is left
+            self._extra_h.cancel()
+            self._extra_h = None
+            assert self._extra is not None
+            self._extra[4] = max(0.0, self._extra_due - self.kernel.now)
         self.stops.add(reason)
         if self.running:
             tau = self.current_tau()
@@ -400,6 +481,11 @@ class ArmController:
 
     def _unpause(self, reason: str) -> None:
         self.stops.discard(reason)
+        if self._extra is not None and self._extra_h is None and self.stops == {"search"}:
+            if not self.failed:
+                self._extra_due = self.kernel.now + float(self._extra[4])
+                self._extra_h = self.kernel.schedule(float(self._extra[4]), self._extra_try)
+            return
         if not self.stops and self.leg is not None and not self.running and not self.at_station:
             self._run()
 
@@ -429,6 +515,7 @@ class ArmController:
             t_req = max(now, max(t_reach, st.notbefore) - self.lookahead)
             self._request_h = self.kernel.schedule(t_req, self._request, st, absolute=True)
         self._arrive_h = self.kernel.schedule(t_reach, self._arrive, absolute=True)
+        self._plan_mark()
 
     def _request(self, st: Station) -> None:
         self._request_h = None
@@ -459,6 +546,11 @@ class ArmController:
             self.granted.discard(piece)
             self._zone_event("zone_leave", piece, leg.task)
             self.send(self.station, 0, "zone_release", piece)
+        if leg.marks:
+            self._fire_marks(st.tau)
+        if self._mark_h is not None:
+            self._mark_h.cancel()
+            self._mark_h = None
         if st.end:
             self._leg_done()
             return
@@ -563,7 +655,8 @@ class ArmController:
             if log is not None:
                 log[1] = now
             self.pose_task = leg.task
-            self.on_task_end(self.index, leg.task, now)
+            if self._search_failure(leg) is None:
+                self.on_task_end(self.index, leg.task, now)
         self.leg = None
         if leg.kind == "task" and np.any(self.sync_error != 0):
             # the lost steps show now (a part misplaced): home the axes (S1.6)
@@ -600,9 +693,16 @@ class ArmController:
             self.busy = False
             self._seg_t0 = now
             if leg.kind == "task":
-                self.send(self.station, 0, "trajectory_end", leg.task)
+                cause = self._search_failure(leg)
+                if cause is None:
+                    self.send(self.station, 0, "trajectory_end", leg.task)
+                else:  # the task ran but failed: told with its cause
+                    self.send(self.station, 0, "trajectory_end", ("failed", leg.task, cause))
 
     def _start_leg(self, leg: Leg) -> None:
+        if leg.kind == "task" and leg.marks is None:
+            leg.searches = self.searches.get(leg.mode, ())
+            leg.marks = _marks(leg.searches)
         self._close_segment()
         self.leg = leg
         self.k = 0
@@ -682,7 +782,13 @@ class ArmController:
         """Retreat to the home joints out of a mover's way (S2.6 geometric
         deadlock) and come back once the mover has passed (``until``:
         its index, leg and station). Returns whether the retreat started."""
-        if self.away is not None or self.running or self.failed or self.leg is None:
+        if (
+            self.away is not None
+            or self.running
+            or self.failed
+            or self.leg is None
+            or self.pushing  # not out of a hole in the middle of a search
+        ):
             return False
         q = self.position()
         traj = self.arm.move(q, self.home_q, self.arm.interpolation)
@@ -791,17 +897,184 @@ class ArmController:
         return not self.running
 
     # ------------------------------------------------------------ faults
-    def crash(self, recovery: float) -> bool:
-        """A crash seen by the force sensor (S1.7): reflex stop (S1.2) if moving.
+    def crash(self, recovery: float, force: float = CRASH_FORCE) -> bool:
+        """A crash of ``force`` newtons (S1.7); see :meth:`sense_crash`.
 
-        Returns whether the arm was moving (else the crash has no effect)."""
-        if self.failed or not self.running:
-            return False
-        self.internal("STOP_D", self.leg.task if self.leg else -1, "excessive force: reflex stop")
+        Returns whether the arm stopped (reflex arc, S1.2)."""
+        return self.sense_crash(force, recovery) == "stop"
+
+    def sense_crash(self, force: float, recovery: float) -> str:
+        """A crash pushing ``force`` newtons on the wrist's z axis now.
+
+        While the arm moves (free motion, low thresholds) or pushes (an
+        insertion search, raised thresholds, not stopped for another
+        reason), a force above the threshold in force stops the motors at
+        once by themselves (the reflex arc of S1.2, ``STOP_D``); the
+        coordinator is told afterwards (``alarm``); the arm goes on
+        ``recovery`` seconds later. A force at or below it is not sensed as
+        a crash (a push of an insertion): the arm goes on.
+
+        Returns
+        -------
+        {"stop", "below", "standing"}
+            Stopped; not above the threshold (no effect); standing idle,
+            waiting or stopped (no effect, as before force sensing was
+            modelled).
+        """
+        pushing = self.pushing and self.stops <= {"search"}
+        if self.failed or self.leg is None or not (self.running or pushing):
+            return "standing"
+        self.sensor.force = np.zeros(3)
+        self.sensor.force[CRASH_AXIS] = float(force)
+        if not self.sensor.exceeds(force):
+            return "below"
+        self.internal("STOP_D", self.leg.task, "excessive force: reflex stop")
         self._pause("crash")
         self.send(self.station, 0, "alarm", ("crash", recovery))
-        self.kernel.schedule(recovery, self._unpause, "crash")
-        return True
+        self.kernel.schedule(recovery, self._resume, "crash")
+        return "stop"
+
+    def _resume(self, reason: str) -> None:
+        """End an unplanned stop, also when standing at a station."""
+        self._unpause(reason)
+        if not self.stops and self.at_station:
+            self._try_pass()
+
+    # --------------------------------------------------- force sensing (S1.7)
+    def read_force(self, axis: int) -> float:
+        """The S1.7 command "tell me the force on axis k" (newtons, the last
+        sample of the wrist sensor; 0 in free motion: inertial forces are
+        not modelled)."""
+        return self.sensor.read(axis)
+
+    def set_thresholds(self, values: float | Sequence[float], why: str = "") -> None:
+        """The S1.7 command "set the thresholds" (newtons: one value for the
+        three components, or three), recorded as a ``"force"`` trace event."""
+        self.sensor.set_thresholds(values)
+        th = self.sensor.thresholds
+        shown = f"{th[0]:g} N" if th[0] == th[1] == th[2] else ", ".join(f"{x:g}" for x in th)
+        leg = self.leg
+        self.trace.add(
+            self.kernel.now,
+            "force",
+            arm=self.name,
+            task=self._task_name(leg.task if leg is not None else -1),
+            detail=f"set thresholds {shown}" + (f": {why}" if why else ""),
+        )
+
+    def _force_event(self, leg: Leg, detail: str) -> None:
+        self.trace.add(
+            self.kernel.now, "force", arm=self.name, task=self._task_name(leg.task), detail=detail
+        )
+
+    def _search_failure(self, leg: Leg) -> str | None:
+        """The cause when a search of the task leg never found its hole."""
+        for s in leg.searches:
+            if not s.found:
+                return s.cause
+        return None
+
+    def _plan_mark(self) -> None:
+        """Schedule the leg's next force-search mark if it comes before the
+        next station."""
+        if self._mark_h is not None:
+            self._mark_h.cancel()
+            self._mark_h = None
+        leg = self.leg
+        if leg is None or not self.running or not leg.marks or leg.fired >= len(leg.marks):
+            return
+        tau = leg.marks[leg.fired][0]
+        if tau > leg.stations[self.k].tau + _EPS:
+            return
+        now = self.kernel.now
+        self._mark_h = self.kernel.schedule(
+            now + max(0.0, tau - self.current_tau()), self._mark, absolute=True
+        )
+
+    def _mark(self) -> None:
+        self._mark_h = None
+        if self.leg is None or self.failed:
+            return
+        self._fire_marks(self.current_tau())
+        if self.running and self._mark_h is None:
+            self._plan_mark()
+
+    def _fire_marks(self, tau: float) -> None:
+        """Do every mark of the leg due at offset ``tau``."""
+        leg = self.leg
+        assert leg is not None and leg.marks is not None
+        while leg.fired < len(leg.marks) and leg.marks[leg.fired][0] <= tau + _EPS:
+            _t, action, si, k = leg.marks[leg.fired]
+            leg.fired += 1
+            s = leg.searches[si]
+            if action == "raise":
+                self.pushing = True
+                self.set_thresholds(
+                    s.search.threshold, f"force-guided search of step {s.step} (S1.7)"
+                )
+                extra = s.tries - s.planned
+                if extra > 0:  # more tries than planned: the clock stands meanwhile
+                    self._extra = [leg, si, 1, extra, s.search.try_time]
+                    self._extra_due = self.kernel.now + s.search.try_time
+                    self._extra_h = self.kernel.schedule(s.search.try_time, self._extra_try)
+                    self._pause("search")
+                    return
+            else:
+                self._try_done(leg, s, k)
+                if k == s.tries and s.tries < s.planned and self.running:
+                    self._skip_to(s.end)
+                    return
+
+    def _try_done(self, leg: Leg, s: InsertSearch, k: int) -> None:
+        """Try ``k`` of search ``s`` ends: read the force on z (S1.7)."""
+        fs = s.search
+        off = fs.offsets()[k - 1]
+        landed = s.found and k == s.tries
+        self.sensor.force = np.zeros(3)
+        self.sensor.force[CRASH_AXIS] = 0.0 if landed else fs.threshold
+        f = self.read_force(CRASH_AXIS)
+        where = f"try {k} of {fs.max_tries} at offset ({off[0] * 1e3:.3g}, {off[1] * 1e3:.3g}) mm"
+        if landed:
+            verdict = "in the hole"
+        elif k < fs.max_tries:
+            verdict = "reached the threshold: not in the hole"
+        else:
+            verdict = "reached the threshold: not in the hole; " + s.cause
+        self._force_event(leg, f"read force on axis {CRASH_AXIS}: {f:g} N, {where}: {verdict}")
+        if k == s.tries:
+            self.sensor.force = np.zeros(3)
+            self.pushing = False
+            self.set_thresholds(self.sensor.free, f"search of step {s.step} over: free motion")
+
+    def _extra_try(self) -> None:
+        """A try made while the trajectory clock stands (more tries than planned)."""
+        self._extra_h = None
+        st = self._extra
+        if st is None or self.failed:
+            return
+        leg, si, k, last, _left = st
+        self._try_done(leg, leg.searches[si], k)
+        if k < last:
+            st[2] = k + 1
+            st[4] = leg.searches[si].search.try_time
+            self._extra_due = self.kernel.now + st[4]
+            self._extra_h = self.kernel.schedule(st[4], self._extra_try)
+            return
+        self._extra = None
+        self._resume("search")
+
+    def _skip_to(self, tau: float) -> None:
+        """The hole was found before the planned tries were over: the rest of
+        the search dwell is skipped (the arm stands meanwhile); it sets off
+        towards its next station now, checked like any departure."""
+        tau = max(self.current_tau(), tau)
+        self._close_segment()
+        self.tau = tau
+        self.t_ref = self.kernel.now
+        self.running = False
+        self._cancel()
+        self.notify()
+        self._run()
 
     def fail(self) -> None:
         """The arm fails for good: it stops, and is taken to its home joints
@@ -812,6 +1085,8 @@ class ArmController:
         self.internal("STOP_D", task, "arm failure")
         self._pause("failed")
         self._close_segment()
+        self._extra = None  # a search in progress ends with the arm
+        self.pushing = False
         self.failed = True
         self.failed_at = self.kernel.now
         self.leg = None

@@ -46,6 +46,7 @@ medium; a lost or dropped frame is sent again after a timeout.
 
 from __future__ import annotations
 
+import bisect
 import itertools
 import math
 import time
@@ -468,7 +469,9 @@ class Coordinator:
         self.stalled = 0
         """Deferred rechecks since a task last started or ended."""
         self.max_stalled = 200
-        self.detour_checks = 2000
+        self.detour_checks = 10_000
+        """Work limit of one OMPL detour search (validity checks, about 10 us
+        each): a search that needs more answers "no detour" and the arm waits."""
         for arm in arms:
             arm.on_task_start = self._on_task_start
             arm.on_task_end = self._on_task_end
@@ -488,14 +491,21 @@ class Coordinator:
         w = plan.waits[t]
         Z = p.n_zones
         out: list[tuple[Piece, float, float, float]] = []
+        borders = sh.borders
+        wl = w.tolist()
+        cw = [0.0]  # waits at the borders <= x: cw[bisect_right(borders, x)] (as ModeShape.shift)
+        for x in wl:
+            cw.append(cw[-1] + x)
         for r, s, e in sh.exclusive:
-            out.append((("zone", r, t, s), s, e, S + s + sh.shift(w, s, True)))
-        wait_at = dict(zip(sh.borders, w.tolist(), strict=True))
+            out.append((("zone", r, t, s), s, e, S + s + cw[bisect.bisect_right(borders, s)]))
+        wait_at = dict(zip(borders, wl, strict=True))
         for r, s, e in sh.moves:
-            cuts = [b for b in sh.borders if s < b < e and wait_at[b] > 0]
+            cuts = [b for b in borders if s < b < e and wait_at[b] > 0]
             pts = [s, *cuts, e]
             for p0, p1 in itertools.pairwise(pts):
-                out.append((("move", r - Z, t, p0), p0, p1, S + p0 + sh.shift(w, p0, True)))
+                out.append(
+                    (("move", r - Z, t, p0), p0, p1, S + p0 + cw[bisect.bisect_right(borders, p0)])
+                )
         for r in sh.tools:
             out.append((("tool", r - 2 * Z, t, 0.0), 0.0, sh.duration, S))
         return out
@@ -858,7 +868,9 @@ class Coordinator:
             self._release(a, payload)
             self._serve_all()
         elif kind == "trajectory_end":
-            if isinstance(payload, tuple):  # a withdrawn trajectory
+            if isinstance(payload, tuple) and payload[0] == "failed":  # ran, but failed
+                self.task_failed(a, int(payload[1]), str(payload[2]))
+            elif isinstance(payload, tuple):  # a withdrawn trajectory
                 self.arm_busy[a] = False
                 self._dispatch_next(a)
             else:
@@ -1018,6 +1030,41 @@ class Coordinator:
             self._try_activation()
             return
         self._dispatch_next(a)
+
+    def task_failed(self, a: int, t: int, cause: str) -> None:
+        """Task ``t`` ran on arm ``a`` to its end but failed (an insertion
+        whose hole was never found, S1.7): it and every task after it are
+        reported failed with the cause (as for a part that never comes); the
+        arms go on with the rest of the plan."""
+        p = self.p
+        now = self.kernel.now
+        self.status[t] = "failed"
+        self.cause[t] = cause
+        self.stalled = 0
+        self.arm_busy[a] = False
+        self.trace.add(now, "task_failed", arm=p.arm_names[a], task=p.task_names[t], detail=cause)
+        if self.zone_checks and self.zm.waiting(a) is None and self.zm.is_moving(a):
+            self._events(self.zm.stop(a).events)
+        stack = list(p.task_succs[t])
+        while stack:
+            s = stack.pop()
+            if self.status[s] not in ("pending", "dispatched"):
+                continue
+            if self.status[s] == "dispatched":  # its arm waits at its start
+                self._withdraw(s)
+            self.status[s] = "failed"
+            if not self.cause[s]:
+                self.cause[s] = f"predecessor {p.task_names[t]!r} failed: {cause}"
+            self.trace.add(now, "task_failed", task=p.task_names[s], detail=self.cause[s])
+            stack.extend(p.task_succs[s])
+        self._build_orders()
+        self._serve_all()
+        if self.activation is not None:
+            self.activation_acks.add(a)
+            self._try_activation()
+            return
+        for b in range(p.n_arms):
+            self._dispatch_next(b)
 
     # ------------------------------------------------------------ faults
     def emergency_stop(self, duration: float) -> None:

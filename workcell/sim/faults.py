@@ -8,10 +8,11 @@ drawn at random with a seed (:meth:`FaultPlan.sample`).
 
 * :class:`ArmFailure` -- the arm stops for good at ``at``; its interrupted
   task and every task planned on it are reassigned by a re-solve.
-* :class:`Crash` -- the wrist force sensor sees a crash during a free move
-  (S1.7): the drive stops at once by itself (reflex arc, S1.2), the
-  coordinator is told afterwards (an alarm); the arm stands for
-  ``recovery`` seconds, then goes on.
+* :class:`Crash` -- a crash of ``force`` newtons on the wrist (S1.7): above
+  the force threshold in force (low in free motion, raised during an
+  insertion search, :mod:`workcell.sim.force`) the drive stops at once by
+  itself (reflex arc, S1.2), the coordinator is told afterwards (an alarm);
+  the arm stands for ``recovery`` seconds, then goes on.
 * :class:`LostSync` -- a stepper axis loses ``steps`` steps (S1.5, S1.6):
   the tracked position is silently wrong until the arm is homed again at
   the end of its task (homing time from the drive).
@@ -94,18 +95,32 @@ class ArmFailure:
 
 @dataclass(frozen=True, slots=True)
 class Crash:
-    """A crash seen by ``arm``'s force sensor at ``at`` if it is moving then
-    (a reflex-arc stop, S1.2, S1.7); it stands ``recovery`` seconds."""
+    """A crash pushing ``force`` newtons on ``arm``'s wrist at ``at``: if the
+    arm moves or pushes then and the force is above the threshold in force,
+    a reflex-arc stop (S1.2, S1.7); it stands ``recovery`` seconds.
+
+    ``force`` defaults to :data:`CRASH_FORCE` (50 N: above the default
+    free-motion threshold, 5 N, and the built-in insertions' raised ones)."""
 
     kind: ClassVar[str] = "crash"
     arm: str
     at: float
     recovery: float = 1.0
+    force: float = 50.0
 
     def __post_init__(self) -> None:
         _name(self.arm, "Crash.arm")
         object.__setattr__(self, "at", _time(self.at, "Crash.at"))
         object.__setattr__(self, "recovery", _time(self.recovery, "Crash.recovery"))
+        f = self.force
+        if isinstance(f, bool) or not isinstance(f, int | float) or not 0 <= f < math.inf:
+            raise ValidationError(f"Crash.force must be a number >= 0 (newtons), got {f!r}")
+        object.__setattr__(self, "force", float(f))
+
+
+CRASH_FORCE = 50.0
+"""Newtons: the default force of a :class:`Crash` (also
+:data:`workcell.sim.force.CRASH_FORCE`)."""
 
 
 @dataclass(frozen=True, slots=True)

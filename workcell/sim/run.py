@@ -51,9 +51,16 @@ from workcell.sim.faults import (
     MessageLoss,
     as_plan,
 )
+from workcell.sim.force import (
+    FREE_THRESHOLD,
+    HOLE_SIGMA,
+    check_insertion,
+    free_thresholds,
+    insert_searches,
+)
 from workcell.sim.kernel import Kernel
 from workcell.sim.medium import FixedLatencyMedium, IdealMedium, Medium
-from workcell.sim.monitor import SafetyMonitor
+from workcell.sim.monitor import LiveMonitor, SafetyMonitor
 from workcell.sim.trace import Metrics, Trace
 
 __all__ = ["CONTROL_TIME", "SimResult", "check_control_bound", "simulate"]
@@ -171,6 +178,8 @@ class SimResult:
         self._tasks = tasks
         self._reservations = reservations
         self._arms: list[ArmController] = []
+        self.monitor: LiveMonitor | None = None
+        """The live safety monitor of the run (its counters), None when off."""
 
     def joints(self, times: Sequence[float] | FloatArray) -> dict[str, FloatArray]:
         """Each arm's actual joints at ``times`` (seconds) as run: arm name ->
@@ -278,9 +287,13 @@ def simulate(
     resolve_budget: float = 0.015,
     resolve_evaluations: int | None = None,
     tick: float | None = None,
-    monitor: bool = True,
+    monitor: bool | str = True,
     monitor_period: float = 0.02,
     control_time: float = CONTROL_TIME,
+    insertion: str = "planned",
+    insertion_sigma: float = HOLE_SIGMA,
+    insertion_tolerance: float | None = None,
+    force_threshold: float | Mapping[str, float] = FREE_THRESHOLD,
     _zone_checks: bool = True,
     _geometry: bool = True,
 ) -> SimResult:
@@ -317,14 +330,35 @@ def simulate(
         Sampling period (seconds) to model every controller tick (S2.3);
         ``None``: event level (idle ticks skipped; the pipeline offset is then
         computed for a 1 ms period).
-    monitor : bool
+    monitor : bool or {"live", "post"}
         Run the independent safety monitor (raises
-        :class:`~workcell.sim.monitor.SafetyViolation`).
+        :class:`~workcell.sim.monitor.SafetyViolation`): ``True`` or
+        ``"live"`` checks during the run and stops it at the first
+        violating sample (:class:`~workcell.sim.monitor.LiveMonitor`);
+        ``"post"`` checks the finished run from the arms' records
+        (:class:`~workcell.sim.monitor.SafetyMonitor`); ``False``: off.
     monitor_period : float
         Seconds between the monitor's collision samples.
     control_time : float
         Per-arm control time per sampling period (S2.2 bound, checked when
         ``tick`` is given).
+    insertion : {"planned", "drawn"}
+        ``"planned"``: every insertion takes the tries the compile planned
+        (the force-guided search is not simulated). ``"drawn"``: each insert
+        step's hole position error is drawn (seeded per task) and the
+        search simulated (S1.7, :mod:`workcell.sim.force`): thresholds
+        raised and restored, tries until one lands, the time they take; a
+        hole never found fails the task ("insertion failed after N tries").
+    insertion_sigma : float
+        Standard deviation of a hole's lateral position error, metres per
+        axis (``insertion="drawn"``).
+    insertion_tolerance : float, optional
+        A try lands when within this many metres of the hole on both axes;
+        default half the search step.
+    force_threshold : float or dict of str -> float
+        The wrist force sensors' free-motion threshold, newtons (one value,
+        or per arm name); a crash above the threshold in force stops the
+        arm (reflex arc, S1.2).
 
     Returns
     -------
@@ -353,6 +387,10 @@ def simulate(
         raise UsageError(f"simulate: seed must be an integer >= 0, got {seed!r}")
     if not isinstance(resolve, bool):
         raise UsageError(f"simulate: resolve must be True or False, got {resolve!r}")
+    if not (isinstance(monitor, bool) or monitor in ("live", "post")):
+        raise UsageError(
+            f"simulate: monitor must be True, False, 'live' or 'post', got {monitor!r}"
+        )
     for name, value in (("resolve_budget", resolve_budget), ("monitor_period", monitor_period)):
         if (
             isinstance(value, bool)
@@ -388,6 +426,13 @@ def simulate(
     fplan = as_plan(faults)
     _check_faults(fplan, cc)
     seed = int(seed)
+    check_insertion(insertion, insertion_sigma, insertion_tolerance)
+    thresholds = free_thresholds(force_threshold, p.arm_names)
+    searches = (
+        insert_searches(cc, seed, sigma=insertion_sigma, tolerance=insertion_tolerance)
+        if insertion == "drawn"
+        else {}
+    )
 
     kernel = Kernel()
     trace = Trace()
@@ -401,7 +446,10 @@ def simulate(
     ticker = Ticker(kernel, period) if tick is not None else None
     arms: list[ArmController] = []
     for a, (arm, q0) in enumerate(zip(cc.cell.arms, cc.cell.start, strict=True)):
-        ctl = ArmController(kernel, a, arm, q0, net.send, trace, period, ticker)
+        ctl = ArmController(
+            kernel, a, arm, q0, net.send, trace, period, ticker, thresholds[arm.name]
+        )
+        ctl.searches = searches
         ctl.task_names = p.task_names
         ctl.zone_names = p.zone_names
         ctl.tool_names = p.tool_names
@@ -433,7 +481,9 @@ def simulate(
         if isinstance(f, ArmFailure):
             kernel.schedule(f.at, coord.arm_failed, arm_index[f.arm], absolute=True)
         elif isinstance(f, Crash):
-            kernel.schedule(f.at, _crash, coord, arm_index[f.arm], f.recovery, absolute=True)
+            kernel.schedule(
+                f.at, _crash, coord, arm_index[f.arm], f.recovery, f.force, absolute=True
+            )
         elif isinstance(f, LostSync):
             kernel.schedule(
                 f.at, _lost_sync, coord, arm_index[f.arm], f.axis, f.steps, absolute=True
@@ -452,6 +502,10 @@ def simulate(
             kernel.schedule(
                 expected, coord.part_late, tasks, expected + f.delay, f.part, absolute=True
             )
+    live: LiveMonitor | None = None
+    if monitor is True or monitor == "live":
+        live = LiveMonitor(cc, kernel, arms, trace, monitor_period)
+        live.start()
     coord.start()
     horizon = (
         10.0 * max(schedule.makespan, 1.0)
@@ -465,7 +519,7 @@ def simulate(
     t_end = max((max((r[1] for r in c.motion), default=0.0) for c in arms), default=0.0)
     for c in arms:
         c.finish()
-    return _result(
+    result = _result(
         cc,
         schedule,
         coord,
@@ -475,22 +529,32 @@ def simulate(
         net,
         ticker,
         seed,
-        monitor,
+        monitor == "post",
         monitor_period,
         wall0,
         t_end,
     )
+    result.monitor = live
+    return result
 
 
-def _crash(coord: Coordinator, a: int, recovery: float) -> None:
+def _crash(coord: Coordinator, a: int, recovery: float, force: float) -> None:
     arm = coord.arms[a]
-    hit = arm.crash(recovery)
+    threshold = float(arm.sensor.thresholds[2])
+    outcome = arm.sense_crash(force, recovery)
+    detail = {
+        "stop": f"crash: reflex-arc stop (S1.2): {force:g} N above the {threshold:g} N threshold",
+        "below": f"crash of {force:g} N not above the {threshold:g} N threshold in force"
+        + (" (pushing, S1.7)" if arm.pushing else "")
+        + ": not sensed, no stop",
+        "standing": "crash while standing: no effect",
+    }[outcome]
     coord.trace.add(
         coord.kernel.now,
         "fault",
         arm=arm.name,
-        delay=recovery if hit else 0.0,
-        detail="crash: reflex-arc stop (S1.2)" if hit else "crash while standing: no effect",
+        delay=recovery if outcome == "stop" else 0.0,
+        detail=detail,
     )
 
 

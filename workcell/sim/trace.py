@@ -3,8 +3,9 @@
 A :class:`Trace` is the ordered list of everything that happened in a run:
 every message on the medium (and the arm controllers' internal S2.3
 messages), zone grants, sleeps and wakes, motion segments, faults, detours,
-re-solves, task starts and ends, zone entries and exits, and safety-monitor
-findings. Each record is a :class:`TraceEvent` with the same fields, so the
+re-solves, task starts and ends, zone entries and exits, safety-monitor
+findings, and the wrist force sensors' thresholds and readings during an
+insertion search (``"force"``). Each record is a :class:`TraceEvent` with the same fields, so the
 whole trace is one table (:meth:`Trace.to_dataframe`).
 
 :class:`Metrics` summarises a run: planned against executed makespan,
@@ -54,8 +55,11 @@ KINDS: tuple[str, ...] = (
     "zone_enter",
     "zone_leave",
     "monitor",
+    "force",
 )
-"""Every kind of trace record."""
+"""Every kind of trace record (``"force"``: the wrist force sensor's
+thresholds set and forces read during an insertion search, S1.7, with
+``simulate(..., insertion="drawn")``; :mod:`workcell.sim.force`)."""
 
 COLUMNS: tuple[str, ...] = (
     "time",

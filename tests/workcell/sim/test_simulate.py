@@ -315,10 +315,10 @@ def test_the_monitor_fires_on_a_run_that_breaks_the_zone_invariants(supersigma: 
     bad = Schedule.from_starts(p, modes, starts)
     with pytest.raises(ValidationError):
         validate(p, bad)
-    # (the first broken invariant in the monitor's order: both arms in one of
-    # the compile's arm-pair zones)
+    # (the earliest broken invariant: both arms moving in the shared zone 'fixture')
     with pytest.raises(
-        SafetyViolation, match=r"'left' and 'right' both inside exclusive zone 'grid_\w+'"
+        SafetyViolation,
+        match=r"'left' and 'right' both moving in shared zone 'fixture' from t = 53\.8162 s",
     ):
         simulate(supersigma, bad, _zone_checks=False, _geometry=False)
     # the same run with the coordinator's zone checks: safe
