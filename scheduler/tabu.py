@@ -23,6 +23,15 @@ It takes the best move that is not tabu — undoing a recent swap, or giving a
 task back to an arm it just left — unless that move beats the best schedule
 so far (aspiration), even when it is worse than the current one. After a run
 without improvement it restarts from the best schedule with a random kick.
+
+On a pure FJSP (:func:`pure_fjsp`: no zone windows, start zones, tools,
+setup times or blocking oracle, and not a re-solve) the decoded schedule is
+the longest-path schedule of the disjunctive graph, and :func:`graph_tabu`
+runs instead: a compiled search (:mod:`scheduler.kernel._tabu_jit`) with the
+k-insertion neighbourhood of Mastrolilli and Gambardella, each move's
+makespan computed exactly, rotating through the tabu settings of
+:data:`GRAPH_CONFIGS`; its best schedules are decoded by
+:func:`~scheduler.kernel.seq_decode`, which must agree on the makespan.
 """
 
 from __future__ import annotations
@@ -30,15 +39,27 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
+from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel import State, compiled, seq_decode
+from scheduler.kernel._tabu_jit import graph_makespan, tabu_run
 from scheduler.problem import Problem
 from scheduler.search import Budget, Evaluator, Solution
+from scheduler.setup import NoSetup
 
-__all__ = ["critical_chain", "tabu_search"]
+__all__ = [
+    "GRAPH_CONFIGS",
+    "GraphConfig",
+    "critical_chain",
+    "graph_tabu",
+    "pure_fjsp",
+    "tabu_search",
+    "warm_up_graph",
+]
 
 _TOL = 1e-6
 
@@ -186,11 +207,26 @@ def tabu_search(
     kick: int = 4,
     random_moves: int = 4,
 ) -> Solution:
-    """Improve ``start`` until ``deadline`` or ``max_evaluations`` decodes."""
+    """Improve ``start`` until ``deadline`` or ``max_evaluations`` decodes.
+
+    On a pure FJSP (:func:`pure_fjsp`) the compiled search on the
+    disjunctive graph runs instead (:func:`graph_tabu`; one iteration counts
+    as one evaluation), with the same stopping rules.
+    """
     p = ev.problem
     inst = ev.inst
     if ev.blocking or start.state is None:
         return start
+    if pure_fjsp(ev):
+        return graph_tabu(
+            ev,
+            start,
+            deadline,
+            rng,
+            on_improve=on_improve,
+            lower=lower,
+            max_evaluations=max_evaluations,
+        )
     base = ev.base if ev.base is not None else inst.new_state()
     todo = np.flatnonzero(base.t_mode < 0)
     if len(todo) == 0:
@@ -413,3 +449,287 @@ def _kick(
         else:
             seq[a, i], seq[a, i + 1] = seq[a, i + 1], seq[a, i]
     return decode(modes, seq, seq_n)
+
+
+def pure_fjsp(ev: Evaluator) -> bool:
+    """Whether the evaluator's problem is a pure FJSP the graph search handles:
+    no zone windows, start zones, tools, setup times or blocking oracle, and
+    no re-solve base state or frozen tasks (releases, arm availability,
+    ``arm_lb`` and allowed modes are handled)."""
+    p = ev.problem
+    return (
+        not ev.blocking
+        and ev.base is None
+        and not ev.frozen
+        and p.n_windows == 0
+        and p.n_tools == 0
+        and isinstance(p.setup, NoSetup)
+        and not any(p.arm_start_zones)
+    )
+
+
+@dataclass(frozen=True)
+class GraphConfig:
+    """One setting of the compiled graph search (:func:`graph_tabu` rotates several)."""
+
+    style: int = 1
+    """What a move makes tabu: 0 the task right after its old predecessor,
+    1 the task itself (it is not moved again), 2 the task right after its old
+    predecessor or right before its old successor, 3 both 1 and 2."""
+    tenure: int = -5
+    """Iterations a move stays tabu (at least); negative: ``-tenure / 10``
+    times the number of critical tasks at that moment."""
+    tenure_span: int = 10
+    """Random extra tenure: ``U{0..tenure_span}`` (negative tenure: in tenths
+    of the base)."""
+    top: int = 16
+    """Moves (best by their exact makespan) whose whole schedule is computed
+    to break ties by the sum of end times (1: ties broken at random)."""
+    rank: int = 2
+    """Tie-break before that: 0 the shorter path through the moved task,
+    2 random, 3 the path through the task first."""
+
+
+GRAPH_CONFIGS = (
+    GraphConfig(1, -5, 10, 16, 2),
+    GraphConfig(3, -3, 10, 1, 0),
+    GraphConfig(2, 5, 5, 1, 0),
+    GraphConfig(1, -10, 5, 16, 2),
+)
+"""The configurations :func:`graph_tabu` rotates through by default."""
+
+
+class _Graph:
+    """The flat arrays of a pure FJSP's disjunctive graph (see :mod:`scheduler.kernel._tabu_jit`)."""
+
+    def __init__(self, ev: Evaluator) -> None:
+        p = ev.problem
+        T = p.n_tasks
+        self.p = p
+        self.pp = np.zeros(T + 1, dtype=np.int64)
+        self.sp = np.zeros(T + 1, dtype=np.int64)
+        self.pp[1:] = np.cumsum([len(x) for x in p.task_preds])
+        self.sp[1:] = np.cumsum([len(x) for x in p.task_succs])
+        self.pi = np.array([q for x in p.task_preds for q in x], dtype=np.int64)
+        self.si = np.array([q for x in p.task_succs for q in x], dtype=np.int64)
+        rel = p.task_release if ev.release is None else ev.release
+        self.rel = np.ascontiguousarray(rel, dtype=np.float64)
+        avail = np.asarray(p.arm_available, dtype=np.float64)
+        if ev.arm_lb is not None:
+            avail = np.maximum(avail, ev.arm_lb)
+        self.avail = np.ascontiguousarray(avail)
+        modes = [
+            [m for m in p.task_modes[t] if ev.allowed is None or ev.allowed[m]] for t in range(T)
+        ]
+        self.tm_ptr = np.zeros(T + 1, dtype=np.int64)
+        self.tm_ptr[1:] = np.cumsum([len(x) for x in modes])
+        self.tm_mode = np.array([m for x in modes for m in x], dtype=np.int64)
+        self.tm_arm = np.ascontiguousarray(p.mode_arm[self.tm_mode], dtype=np.int64)
+        self.tm_dur = np.ascontiguousarray(p.mode_duration[self.tm_mode], dtype=np.float64)
+
+    def choice_of(self, modes: IntArray) -> IntArray:
+        """Per task, the index of its mode among its allowed modes."""
+        out = np.zeros(self.p.n_tasks, dtype=np.int64)
+        for t in range(self.p.n_tasks):
+            lo, hi = int(self.tm_ptr[t]), int(self.tm_ptr[t + 1])
+            hit = np.flatnonzero(self.tm_mode[lo:hi] == modes[t])
+            if len(hit) == 0:
+                raise InternalError(f"task {self.p.task_names[t]!r} is in a mode not allowed")
+            out[t] = hit[0]
+        return out
+
+    def modes_of(self, choice: IntArray) -> IntArray:
+        """Mode ids from per-task choices."""
+        out: IntArray = self.tm_mode[self.tm_ptr[:-1] + choice]
+        return out
+
+    def makespan(self, choice: IntArray, seq: IntArray, seq_n: IntArray) -> float:
+        """The longest path of the graph (-1.0: the sequences make a cycle)."""
+        idx = self.tm_ptr[:-1] + choice
+        return float(
+            graph_makespan(
+                self.pp,
+                self.pi,
+                self.sp,
+                self.si,
+                self.rel,
+                self.avail,
+                self.tm_arm[idx],
+                self.tm_dur[idx],
+                seq,
+                seq_n,
+            )
+        )
+
+
+def graph_tabu(
+    ev: Evaluator,
+    start: Solution,
+    deadline: float,
+    rng: np.random.Generator,
+    *,
+    on_improve: Callable[[Solution], None] | None = None,
+    lower: float = 0.0,
+    max_evaluations: int | None = None,
+    configs: tuple[GraphConfig, ...] | None = None,
+    episode: int = 3000,
+    patience: int = 6000,
+    kick: int = 3,
+    chunk: int = 32,
+) -> Solution:
+    """The compiled tabu search of a pure FJSP (:mod:`scheduler.kernel._tabu_jit`).
+
+    k-insertion moves of critical tasks ranked by their exact makespan; the
+    best schedule is decoded by :func:`~scheduler.kernel.seq_decode` at the
+    end (and at each improvement reported to ``on_improve``). Iterations run
+    in chunks of ``chunk`` between checks of the deadline, the work limit
+    (one iteration = one evaluation) and a stop request.
+
+    Parameters
+    ----------
+    ev : Evaluator
+        Of a problem :func:`pure_fjsp` accepts.
+    start : Solution
+        A decoded solution (with its state).
+    deadline : float
+        ``time.perf_counter()`` value to stop at.
+    rng : numpy.random.Generator
+        Seeds the compiled search's own generator.
+    on_improve : callable or None
+        Called with the new best after each compiled call that improved it.
+    lower : float
+        Stop at this makespan (a lower bound).
+    max_evaluations : int or None
+        Iterations at most.
+    configs : tuple of GraphConfig or None
+        The settings to rotate through (default :data:`GRAPH_CONFIGS`).
+    episode : int
+        Iterations per setting; each new one starts from the best schedule
+        with a kick.
+    patience : int
+        Iterations without a new best before restarting from the best.
+    kick : int
+        Random insertions at a restart.
+    chunk : int
+        Iterations per compiled call at first (doubled while a call takes
+        under 4 ms; the search's course does not depend on it).
+
+    Returns
+    -------
+    Solution
+        The best solution found (``start`` when nothing better).
+    """
+    p = ev.problem
+    inst = ev.inst
+    T = p.n_tasks
+    if start.state is None or T == 0:
+        return start
+    g = _Graph(ev)
+    todo = np.arange(T, dtype=np.int64)
+    seq, seq_n = _sequences(p, start.state, todo)
+    choice = g.choice_of(start.state.t_mode)
+    cmax0 = g.makespan(choice, seq, seq_n)
+    if abs(cmax0 - start.makespan) > 1e-6:
+        raise InternalError(
+            f"graph makespan {cmax0} differs from the decoded {start.makespan} on {p.name!r}"
+        )
+    b_choice, b_seq, b_seq_n = choice.copy(), seq.copy(), seq_n.copy()
+    tabu = np.zeros((T, T + p.n_arms + 1), dtype=np.int64)
+    rs = np.array([int(rng.integers(1, 2**63 - 1))], dtype=np.uint64)
+    ctl = np.zeros(3, dtype=np.int64)
+    fctl = np.array([cmax0, cmax0, float(lower)])
+    cfgs = configs if configs else GRAPH_CONFIGS
+    k_cfg = 0
+    in_episode = 0
+    limit = math.inf if max_evaluations is None else ev.evaluations + max_evaluations
+
+    def decoded(ch: IntArray, sq: IntArray, sn: IntArray) -> Solution:
+        modes = g.modes_of(ch)
+        ok, st, order = seq_decode(
+            inst, sq, sn, modes, waits=ev.waits, release=ev.release, arm_lb=ev.arm_lb
+        )
+        if not ok:
+            raise InternalError(f"graph search sequences do not decode on {p.name!r}")
+        mk = float(st.t_end.max())
+        if abs(mk - fctl[0]) > 1e-6:
+            raise InternalError(f"graph makespan {fctl[0]} but decoded {mk} on {p.name!r}")
+        return Solution(order.copy(), st.t_mode.copy(), mk, float(st.t_end.sum()), st)
+
+    stop = ev.stop
+    while (
+        time.perf_counter() < deadline
+        and ev.evaluations < limit
+        and fctl[0] > lower + 1e-9
+        and not (stop is not None and stop.is_set())
+    ):
+        if in_episode >= episode:
+            # next configuration, from the best with a kick
+            k_cfg = (k_cfg + 1) % len(cfgs)
+            in_episode = 0
+            ctl[1] = patience
+        cf = cfgs[k_cfg]
+        n = int(min(chunk, limit - ev.evaluations, max(1, episode - in_episode)))
+        ctl[2] = 0
+        tc = time.perf_counter()
+        done = tabu_run(
+            g.pp,
+            g.pi,
+            g.sp,
+            g.si,
+            g.rel,
+            g.avail,
+            g.tm_ptr,
+            g.tm_arm,
+            g.tm_dur,
+            choice,
+            seq,
+            seq_n,
+            b_choice,
+            b_seq,
+            b_seq_n,
+            tabu,
+            rs,
+            ctl,
+            fctl,
+            n,
+            cf.tenure,
+            cf.tenure_span,
+            patience,
+            kick,
+            cf.style,
+            cf.rank,
+            cf.top,
+        )
+        in_episode += int(done)
+        ev.evaluations += int(done)
+        if time.perf_counter() - tc < 0.004 and done == n:
+            chunk = min(2 * chunk, 4096)  # fewer calls where iterations are cheap
+        if done == 0:
+            break
+        if ctl[2] and on_improve is not None:
+            on_improve(decoded(b_choice, b_seq, b_seq_n))
+    if fctl[0] >= start.makespan - 1e-9:
+        return start
+    return decoded(b_choice, b_seq, b_seq_n)
+
+
+_WARM = False
+
+
+def warm_up_graph() -> None:
+    """Compile (or load from numba's on-disk cache) the graph search, once per process.
+
+    The first compile takes several seconds once per machine; solvers call
+    this before starting their clock.
+    """
+    global _WARM
+    if _WARM:
+        return
+    from scheduler.fjsp import parse_fjsp
+
+    p = parse_fjsp("2 2 1\n2 2 1 2 2 3 1 1 1\n1 2 1 2 2 1\n", name="warm-up")
+    ev = Evaluator(p)
+    sol = ev.evaluate(np.arange(p.n_tasks, dtype=np.int64))
+    if sol is not None:
+        graph_tabu(ev, sol, math.inf, np.random.default_rng(0), max_evaluations=2)
+    _WARM = True
