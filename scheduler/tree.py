@@ -88,7 +88,9 @@ class TreeOptions:
     """Processes searching at once (like CP-SAT's workers): the others run
     independent improvement from other seeds in forked processes, and the
     best schedule wins. Used only with a wall-clock limit of at least
-    ``parallel_min_time`` and where ``fork`` exists (Linux); work-limited runs
+    ``parallel_min_time``, where ``fork`` exists (Linux) and the caller is
+    not a daemon process (a daemon, e.g. a Dask worker, searches alone and
+    says so in ``stats.extra["workers"]``); work-limited runs
     stay in one process, so they remain exactly repeatable."""
     parallel_min_time: float = 1.0
     portfolio_max_tasks: int = 16
@@ -428,8 +430,12 @@ def solve_tree(
         stats.extra["exact"] = "left to the racing CP-SAT"
     members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
     remaining = deadline - time.perf_counter()
+    daemon = multiprocessing.current_process().daemon  # e.g. a Dask worker: no children
+    if daemon and opt.workers > 1:
+        stats.extra["workers"] = "1 (a daemon process may not start worker processes)"
     if (
         opt.workers > 1
+        and not daemon
         and time_limit is not None
         and opt.max_evaluations is None
         and not can_prove
