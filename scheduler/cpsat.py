@@ -40,11 +40,10 @@ from typing import Any
 
 import numpy as np
 
-from scheduler.bounds import lower_bound
 from scheduler.problem import Problem
-from scheduler.result import Result, SearchStats, SolveStatus
+from scheduler.result import Result, SolveStatus
 from scheduler.schedule import Schedule, ScheduleError, validate
-from scheduler.search import Evaluator, priority_order
+from scheduler.start import begin
 
 __all__ = ["build_model", "integer_scale", "solve_cpsat"]
 
@@ -273,14 +272,11 @@ def solve_cpsat(
     solution on problems with setup circuits; ``False`` hints nothing."""
     from ortools.sat.python import cp_model
 
-    t0 = time.perf_counter()
-    p = problem
-    stats = SearchStats()
-    lb = lower_bound(p)
-    if p.n_tasks == 0:
-        return Result.empty("cpsat", seed, time.perf_counter() - t0, stats)
-    ev = Evaluator(p, waits=waits)
-    first = ev.evaluate(priority_order(p))
+    st = begin(problem, "cpsat", seed, waits=waits)
+    trivial = st.trivial()
+    if trivial is not None:
+        return trivial
+    p, t0, stats, ev, lb, first = problem, st.t0, st.stats, st.ev, st.lb, st.first
     horizon = (
         first.makespan
         if first is not None

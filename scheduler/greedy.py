@@ -21,11 +21,10 @@ import time
 from dataclasses import dataclass
 
 from multiarm.errors import UsageError
-from scheduler.bounds import lower_bound
 from scheduler.problem import Problem
-from scheduler.result import Result, SearchStats, SolveStatus
+from scheduler.result import Result, SolveStatus
 from scheduler.schedule import validate
-from scheduler.search import Evaluator, priority_order
+from scheduler.start import begin
 
 __all__ = ["GreedyOptions", "solve_greedy"]
 
@@ -80,14 +79,11 @@ def solve_greedy(
         Status ``optimal`` when the makespan meets the lower bound.
     """
     opt = options or GreedyOptions()
-    t0 = time.perf_counter()
-    p = problem
-    stats = SearchStats()
-    if p.n_tasks == 0:
-        return Result.empty("greedy", seed, time.perf_counter() - t0, stats)
-    lb = lower_bound(p)
-    ev = Evaluator(p, waits=waits)
-    sol = ev.evaluate(priority_order(p))
+    st = begin(problem, "greedy", seed, waits=waits)
+    trivial = st.trivial()
+    if trivial is not None:
+        return trivial
+    p, t0, stats, ev, lb, sol = problem, st.t0, st.stats, st.ev, st.lb, st.first
     stats.evaluations = ev.evaluations
     if sol is None:
         if opt.fallback:

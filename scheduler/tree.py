@@ -45,11 +45,12 @@ import numpy as np
 from multiarm.errors import UsageError
 from multiarm.types import FloatArray, IntArray
 from scheduler import exact
-from scheduler.bounds import heads_and_tails, lower_bound
+from scheduler.bounds import heads_and_tails
 from scheduler.kernel import State, expand
 from scheduler.problem import Problem
 from scheduler.result import Result, SearchStats, SolveStatus
 from scheduler.search import Evaluator, Solution, local_search, priority_order
+from scheduler.start import begin
 from scheduler.tabu import pure_fjsp, tabu_search, warm_up_graph
 
 __all__ = ["TreeOptions", "beam_pass", "solve_tree"]
@@ -388,13 +389,14 @@ def solve_tree(
     opt = options or TreeOptions()
     if problem.n_windows == 0 and problem.n_tools == 0 and problem.blocking is None:
         warm_up_graph()  # before the clock starts, as the kernel's own warm-up
-    t0 = time.perf_counter()
+    st = begin(problem, "tree", seed, waits=waits, record_first=True)
+    t0 = st.t0
     deadline = math.inf if time_limit is None else t0 + time_limit
     rng = np.random.default_rng(seed)
-    stats = SearchStats()
+    stats = st.stats
     p = problem
-    ev = Evaluator(p, waits=waits)
-    best: Solution | None = None
+    ev = st.ev
+    best: Solution | None = st.first  # the HEFT list, recorded as the first incumbent
 
     def offer(sol: Solution | None) -> None:
         nonlocal best
@@ -406,13 +408,10 @@ def solve_tree(
 
     if p.n_tasks == 0:
         return _finish(p, ev, None, 0.0, t0, seed, stats, proven=True)
-    # first schedule (before anything else): the warm start, and the HEFT list
+    # the HEFT list came first (begin); then the warm start, if given
     if start is not None:
         offer(ev.evaluate(start.order, start.modes))
-    offer(ev.evaluate(priority_order(p)))
-    ph = time.perf_counter()
-    lb = lower_bound(p)
-    stats.phases["bound"] = time.perf_counter() - ph
+    lb = st.lb
     proven = False
     can_prove, why = exact.applicable(p, opt.exact_max_tasks)
     stats.extra["exact"] = "applicable" if can_prove else why
