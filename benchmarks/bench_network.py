@@ -397,8 +397,19 @@ def main(argv: list[str] | None = None) -> None:
         for r in span
         if "medium" in r and not _nan(r["medium"])
     ]
-    tails = {f"{r['medium']} N=10 load {r['load']:g}": r["tail"] for r in round_rows if "tail" in r}
-    tails.update({f"{r['medium']} (event level)": r["tail"] for r in event_rows if "tail" in r})
+    # rows without a curve carry NaN there (the rows of one table share columns)
+    tails = {
+        f"{r['medium']} N=10 load {r['load']:g}": r["tail"]
+        for r in round_rows
+        if isinstance(r.get("tail"), list)
+    }
+    tails.update(
+        {
+            f"{r['medium']} (event level)": r["tail"]
+            for r in event_rows
+            if isinstance(r.get("tail"), list)
+        }
+    )
     png = out / "network_tails.png"
     plot(tails, dcr_bound(), png)
     ticks = max((r["ticks"] for r in event_rows), default=0)

@@ -19,15 +19,18 @@ Side by side in one run, on one plan (the tree search's, seeded):
   the executed makespan and failed tasks with and without re-solving.
 
 Targets (issue): >= 2000x at event level, >= 100x at 1 ms ticks.
-Results: ``benchmarks/results/sim.json`` and ``sim.md``.
 
-Run: ``python -m benchmarks.bench_sim [--cell cell8] [--scenarios 6] [--seed 0] [--quick]``
-(``--quick``: supersigma, one repeat, two scenarios; seconds).
+A thin wrapper of the sweep ``benchmarks/sweeps/sim.toml`` (one
+``benchmark`` run of :func:`measure`: the whole table); it measures again on
+every call. Results: ``benchmarks/results/sim.parquet``, ``.json`` and
+``.md``.
+
+Run: ``python -m benchmarks.bench_sim [--quick]`` (``--quick``: supersigma,
+one repeat, two scenarios; seconds).
 """
 
 from __future__ import annotations
 
-import argparse
 import math
 import signal
 import sys
@@ -38,13 +41,14 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.common import write
+from benchmarks.common import table_main
 from multiarm.errors import MultiarmError
 from scheduler import solve, validate
 from workcell import compile_cell_detailed, load_example
 from workcell.sim.faults import FaultPlan
 from workcell.sim.run import simulate
 
+NAME = "sim"
 EVENT_TARGET = 2000.0
 TICK_TARGET = 100.0
 
@@ -159,59 +163,78 @@ def _faulty_run(
     }
 
 
-def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    ap.add_argument("--cell", default="cell8")
-    ap.add_argument("--scenarios", type=int, default=6)
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--time-limit", type=float, default=5.0, help="tree search budget, seconds")
-    ap.add_argument("--tick", type=float, default=1e-3, help="controller period, seconds")
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument(
-        "--cap", type=float, default=120.0, help="wall-clock cap of one fault run, seconds"
-    )
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args(argv)
-    if args.quick:
-        args.cell, args.scenarios, args.repeat, args.time_limit = "supersigma", 2, 1, 1.0
-
+def measure(
+    seed: int,
+    cell: str,
+    scenarios: int,
+    repeat: int,
+    time_limit: float,
+    tick: float,
+    cap: float,
+) -> dict[str, Any]:
+    """The whole table, side by side on one plan: the speed rows and the fault
+    scenarios with and without re-solving (one sweep run)."""
     t0 = time.perf_counter()
-    cc = compile_cell_detailed(load_example(args.cell))
+    cc = compile_cell_detailed(load_example(cell))
     compile_s = time.perf_counter() - t0
     p = cc.problem
-    r = solve(p, "tree", time_limit=args.time_limit, seed=args.seed)
-    assert r.schedule is not None
+    r = solve(p, "tree", time_limit=time_limit, seed=seed)
+    if r.schedule is None:
+        raise MultiarmError(f"cell {cell!r}: the tree search found no plan in {time_limit:g} s")
     plan = r.schedule
     planned = validate(p, plan)
     simulate(cc, plan, seed=0, monitor=False)  # warm caches and compiled code once
 
     print("bench_sim: event level", file=sys.stderr, flush=True)
-    event = _speed(cc, plan, args.repeat, monitor=False)
+    event = _speed(cc, plan, repeat, monitor=False)
     monitors: dict[str, dict[str, Any]] = {}
     for how in ("live", "post"):
         try:
-            monitors[how] = _speed(cc, plan, args.repeat, monitor=how)
+            monitors[how] = _speed(cc, plan, repeat, monitor=how)
         except MultiarmError as exc:  # the monitor stopped the run: say so in the table
             monitors[how] = {"error": str(exc)}
-    monitored = monitors["live"]
     print("bench_sim: every tick", file=sys.stderr, flush=True)
-    tick = _speed(cc, plan, max(1, args.repeat - 1), monitor=False, tick=args.tick)
+    ticked = _speed(cc, plan, max(1, repeat - 1), monitor=False, tick=tick)
 
     scen: list[dict[str, Any]] = []
-    stops: list[str] = []
     latencies: list[float] = []
-    for label, faults in _scenarios(cc, plan, args.scenarios, args.seed):
+    for label, faults in _scenarios(cc, plan, scenarios, seed):
         print(f"bench_sim: fault: {label}", file=sys.stderr, flush=True)
-        with_r = _faulty_run(cc, plan, faults, args.seed, args.cap)
-        without = _faulty_run(cc, plan, faults, args.seed, args.cap, resolve=False)
+        with_r = _faulty_run(cc, plan, faults, seed, cap)
+        without = _faulty_run(cc, plan, faults, seed, cap, resolve=False)
         latencies += with_r["latency"]
         scen.append(
             {"fault": label, "faults": faults.to_dicts(), "with": with_r, "without": without}
         )
-    lat_ms = np.asarray(latencies) * 1e3
+    return {
+        "cell": cell,
+        "seed": seed,
+        "repeat": repeat,
+        "time_limit": time_limit,
+        "tick": tick,
+        "n_arms": p.n_arms,
+        "n_tasks": p.n_tasks,
+        "planned_makespan": planned,
+        "compile_s": compile_s,
+        "event_level": event,
+        "tick_level": ticked,
+        "monitored": monitors["live"],
+        "monitored_post_run": monitors["post"],
+        "targets": {"event_level": EVENT_TARGET, "tick_level": TICK_TARGET},
+        "resolve_latency_ms": (np.asarray(latencies) * 1e3).tolist(),
+        "scenarios": scen,
+    }
+
+
+def table(r: Any) -> str:
+    """The Markdown tables of the one measured row."""
+    event, tick, scen = r["event_level"], r["tick_level"], r["scenarios"]
+    monitors = {"live": r["monitored"], "post": r["monitored_post_run"]}
+    lat_ms = np.asarray(r["resolve_latency_ms"], dtype=float)
+    planned, n_arms, n_tasks = r["planned_makespan"], r["n_arms"], r["n_tasks"]
+    repeat = int(r["repeat"])
     budget_ms = 15.0  # simulate's default resolve_budget
+    stops: list[str] = []
 
     def q(k: float) -> str:
         return f"{float(np.percentile(lat_ms, k)):.2f}" if lat_ms.size else "-"
@@ -219,23 +242,23 @@ def main(argv: list[str] | None = None) -> None:
     def verdict(rate: float, target: float) -> str:
         return "met" if rate >= target else f"**missed** ({rate / target:.2f} of the target)"
 
-    def fmt(x: float) -> str:
-        return f"{x:.1f}" if math.isfinite(x) else "-"
+    def fmt(x: float | None) -> str:
+        return f"{x:.1f}" if x is not None and math.isfinite(x) else "-"
 
     lines = [
-        f"# Simulation: {args.cell} ({p.n_arms} arms, {p.n_tasks} tasks)",
+        f"# Simulation: {r['cell']} ({n_arms} arms, {n_tasks} tasks)",
         "",
-        f"Plan: tree search, {args.time_limit:g} s, seed {args.seed}: makespan {planned:.1f} s "
-        f"(compile {compile_s:.1f} s). Simulation seed 0, ideal medium. Best of {args.repeat} "
+        f"Plan: tree search, {r['time_limit']:g} s, seed {r['seed']}: makespan {planned:.1f} s "
+        f"(compile {r['compile_s']:.1f} s). Simulation seed 0, ideal medium. Best of {repeat} "
         "runs (ticks: of "
-        f"{max(1, args.repeat - 1)}). One process on a shared 2-core machine.",
+        f"{max(1, repeat - 1)}). One process on a shared 2-core machine.",
         "",
         "| run | simulated s | wall s | simulated s per wall s | target | kernel events | ticks |",
         "|---|---|---|---|---|---|---|",
         f"| event level (monitor off) | {event['simulated_s']:.1f} | {event['wall_s']:.3f} | "
         f"{event['rate']:.0f}x | >= {EVENT_TARGET:.0f}x: {verdict(event['rate'], EVENT_TARGET)} | "
         f"{event['events']} | {event['ticks']} |",
-        f"| every {args.tick * 1e3:g} ms tick, all {p.n_arms} arms (monitor off) | "
+        f"| every {r['tick'] * 1e3:g} ms tick, all {n_arms} arms (monitor off) | "
         f"{tick['simulated_s']:.1f} | {tick['wall_s']:.3f} | {tick['rate']:.0f}x | "
         f">= {TICK_TARGET:.0f}x: {verdict(tick['rate'], TICK_TARGET)} | {tick['events']} | "
         f"{tick['ticks']} |",
@@ -255,7 +278,7 @@ def main(argv: list[str] | None = None) -> None:
         *(
             [
                 "",
-                f"**Incomplete runs**: without any fault, {event['failed_tasks']} of {p.n_tasks} "
+                f"**Incomplete runs**: without any fault, {event['failed_tasks']} of {n_tasks} "
                 "tasks were reported failed, so the rates above are over a run that stopped "
                 f"early ({event['simulated_s']:.1f} s simulated of the {planned:.1f} s planned).",
             ]
@@ -279,9 +302,9 @@ def main(argv: list[str] | None = None) -> None:
             stops.append(
                 f"{sc['fault']}: "
                 + "; ".join(
-                    f"{which}: {r['stopped']}"
-                    for which, r in (("re-solving", w), ("keeping the plan", wo))
-                    if r["stopped"]
+                    f"{which}: {x['stopped']}"
+                    for which, x in (("re-solving", w), ("keeping the plan", wo))
+                    if x["stopped"]
                 )
             )
         lines.append(
@@ -298,26 +321,18 @@ def main(argv: list[str] | None = None) -> None:
         "failed while the other arms go on (the makespan is then over the tasks that ran). "
         "Without re-solving is `simulate(..., resolve=False)`.",
     ]
-    path = write(
-        "sim",
-        {
-            "cell": args.cell,
-            "seed": args.seed,
-            "time_limit": args.time_limit,
-            "tick": args.tick,
-            "planned_makespan": planned,
-            "compile_s": compile_s,
-            "event_level": event,
-            "tick_level": tick,
-            "monitored": monitored,
-            "monitored_post_run": monitors["post"],
-            "targets": {"event_level": EVENT_TARGET, "tick_level": TICK_TARGET},
-            "resolve_latency_ms": lat_ms.tolist(),
-            "scenarios": scen,
-        },
-        "\n".join(lines) + "\n",
-    )
-    print(path.read_text())
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the sweep and write the table.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        Command-line arguments (default: ``sys.argv``).
+    """
+    table_main(NAME, table, argv, __doc__, speed=True, one_row=True)
 
 
 if __name__ == "__main__":
