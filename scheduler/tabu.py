@@ -46,7 +46,7 @@ import numpy as np
 from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel import State, compiled, seq_decode
-from scheduler.kernel._tabu_jit import graph_makespan, tabu_run
+from scheduler.kernel._tabu_jit import GraphArrays, SearchArrays, graph_makespan, tabu_run
 from scheduler.problem import Problem
 from scheduler.search import Budget, Evaluator, Solution
 from scheduler.setup import NoSetup
@@ -526,6 +526,18 @@ class _Graph:
         self.tm_mode = np.array([m for x in modes for m in x], dtype=np.int64)
         self.tm_arm = np.ascontiguousarray(p.mode_arm[self.tm_mode], dtype=np.int64)
         self.tm_dur = np.ascontiguousarray(p.mode_duration[self.tm_mode], dtype=np.float64)
+        self.arrays = GraphArrays(
+            self.pp,
+            self.pi,
+            self.sp,
+            self.si,
+            self.rel,
+            self.avail,
+            self.tm_ptr,
+            self.tm_arm,
+            self.tm_dur,
+        )
+        """The same arrays bundled for the compiled search."""
 
     def choice_of(self, modes: IntArray) -> IntArray:
         """Per task, the index of its mode among its allowed modes."""
@@ -546,20 +558,7 @@ class _Graph:
     def makespan(self, choice: IntArray, seq: IntArray, seq_n: IntArray) -> float:
         """The longest path of the graph (-1.0: the sequences make a cycle)."""
         idx = self.tm_ptr[:-1] + choice
-        return float(
-            graph_makespan(
-                self.pp,
-                self.pi,
-                self.sp,
-                self.si,
-                self.rel,
-                self.avail,
-                self.tm_arm[idx],
-                self.tm_dur[idx],
-                seq,
-                seq_n,
-            )
-        )
+        return float(graph_makespan(self.arrays, self.tm_arm[idx], self.tm_dur[idx], seq, seq_n))
 
 
 def graph_tabu(
@@ -638,6 +637,7 @@ def graph_tabu(
     rs = np.array([int(rng.integers(1, 2**63 - 1))], dtype=np.uint64)
     ctl = np.zeros(3, dtype=np.int64)
     fctl = np.array([cmax0, cmax0, float(lower)])
+    state = SearchArrays(choice, seq, seq_n, b_choice, b_seq, b_seq_n, tabu, rs, ctl, fctl)
     cfgs = configs if configs else GRAPH_CONFIGS
     k_cfg = 0
     in_episode = 0
@@ -672,25 +672,8 @@ def graph_tabu(
         ctl[2] = 0
         tc = time.perf_counter()
         done = tabu_run(
-            g.pp,
-            g.pi,
-            g.sp,
-            g.si,
-            g.rel,
-            g.avail,
-            g.tm_ptr,
-            g.tm_arm,
-            g.tm_dur,
-            choice,
-            seq,
-            seq_n,
-            b_choice,
-            b_seq,
-            b_seq_n,
-            tabu,
-            rs,
-            ctl,
-            fctl,
+            g.arrays,
+            state,
             n,
             cf.tenure,
             cf.tenure_span,

@@ -49,11 +49,48 @@ reference the tests compare the compiled code with).
 
 from __future__ import annotations
 
+from typing import Any, NamedTuple
+
 import numpy as np
 
 from scheduler.kernel._jit import jit_enabled, njit
 
-__all__ = ["all_moves", "graph_makespan", "tabu_run"]
+
+class GraphArrays(NamedTuple):
+    """A pure FJSP's fixed arrays (CSR offsets ``*_ptr``/``pp``/``sp``):
+    predecessors ``pp``/``pi``, successors ``sp``/``si``, releases ``rel``,
+    arm availability ``avail``, and each task's allowed modes as their arm
+    ``tm_arm`` and duration ``tm_dur`` (``tm_ptr[t]..tm_ptr[t+1]``)."""
+
+    pp: Any
+    pi: Any
+    sp: Any
+    si: Any
+    rel: Any
+    avail: Any
+    tm_ptr: Any
+    tm_arm: Any
+    tm_dur: Any
+
+
+class SearchArrays(NamedTuple):
+    """The search's state, mutated in place by :func:`tabu_run`: the current
+    solution (``choice``, ``seq``, ``seq_n``), the best one (``b_*``), the
+    tabu table, the random state ``rs`` and the control arrays ``ctl``/``fctl``."""
+
+    choice: Any
+    seq: Any
+    seq_n: Any
+    b_choice: Any
+    b_seq: Any
+    b_seq_n: Any
+    tabu: Any
+    rs: Any
+    ctl: Any
+    fctl: Any
+
+
+__all__ = ["GraphArrays", "SearchArrays", "all_moves", "graph_makespan", "tabu_run"]
 
 _EPS = 1e-9
 
@@ -171,8 +208,9 @@ def _tails(sp, si, dur, mnext, skip, order, n, tail):
 
 
 @njit(cache=True)
-def graph_makespan(pp, pi, sp, si, rel, avail, arm, dur, seq, seq_n):
+def graph_makespan(g, arm, dur, seq, seq_n):
     """The longest path of the graph of arm sequences ``seq`` (-1.0: a cycle)."""
+    pp, pi, sp, si, rel, avail = g.pp, g.pi, g.sp, g.si, g.rel, g.avail
     T = len(rel)
     mprev = np.empty(T, dtype=np.int64)
     mnext = np.empty(T, dtype=np.int64)
@@ -370,38 +408,11 @@ def _apply(v, c, k, i, tm_ptr, tm_arm, tm_dur, choice, arm, dur, seq, seq_n):
 
 
 @njit(cache=True, nogil=True)
-def tabu_run(
-    pp,
-    pi,
-    sp,
-    si,
-    rel,
-    avail,
-    tm_ptr,
-    tm_arm,
-    tm_dur,
-    choice,
-    seq,
-    seq_n,
-    b_choice,
-    b_seq,
-    b_seq_n,
-    tabu,
-    rs,
-    ctl,
-    fctl,
-    iters,
-    tenure_lo,
-    tenure_span,
-    patience,
-    kick,
-    style,
-    rank,
-    top,
-):
+def tabu_run(g, state, iters, tenure_lo, tenure_span, patience, kick, style, rank, top):
     """Run up to ``iters`` iterations of the tabu search (see the module docstring).
 
-    The current solution is ``choice`` (per task, the index of its mode among
+    ``g`` is the problem (:class:`GraphArrays`), ``state`` the search
+    (:class:`SearchArrays`, mutated). The current solution is ``choice`` (per task, the index of its mode among
     ``tm_ptr[t]..tm_ptr[t+1]``), ``seq``/``seq_n`` (the arms' sequences); the
     best one ``b_*``. ``ctl`` holds (iteration, iterations since the best
     improved, improvements found in this call); ``fctl`` (best makespan,
@@ -412,6 +423,11 @@ def tabu_run(
     ``-tenure_lo / 10`` times the number of critical tasks plus a random
     share ``tenure_span / 10`` of that. Returns the iterations run.
     """
+    pp, pi, sp, si, rel, avail = g.pp, g.pi, g.sp, g.si, g.rel, g.avail
+    tm_ptr, tm_arm, tm_dur = g.tm_ptr, g.tm_arm, g.tm_dur
+    choice, seq, seq_n = state.choice, state.seq, state.seq_n
+    b_choice, b_seq, b_seq_n = state.b_choice, state.b_seq, state.b_seq_n
+    tabu, rs, ctl, fctl = state.tabu, state.rs, state.ctl, state.fctl
     T = len(rel)
     A = seq.shape[0]
     arm = np.empty(T, dtype=np.int64)
@@ -702,13 +718,15 @@ def tabu_run(
 
 
 @njit(cache=True)
-def all_moves(pp, pi, sp, si, rel, avail, tm_ptr, tm_arm, tm_dur, choice, seq, seq_n, fast):
+def all_moves(g, choice, seq, seq_n, fast):
     """Every k-insertion of a critical task that keeps the graph acyclic, with
     its exact makespan: rows ``(task, mode choice, arm, position, makespan)``
     (position in the arm's sequence without the task). The neighbourhood the
     search ranks, for tests against brute force; ``fast`` computes the graph
     without the task as the search does (:func:`_minus_fast`), else from
     scratch (:func:`_minus`)."""
+    pp, pi, sp, si, rel, avail = g.pp, g.pi, g.sp, g.si, g.rel, g.avail
+    tm_ptr, tm_arm, tm_dur = g.tm_ptr, g.tm_arm, g.tm_dur
     T = len(rel)
     arm = np.empty(T, dtype=np.int64)
     dur = np.empty(T)

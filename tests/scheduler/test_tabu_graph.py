@@ -23,7 +23,7 @@ import pytest
 from scheduler import Model, parse_fjsp, read_fjsp, solve, validate
 from scheduler.generate import random_problem
 from scheduler.kernel import seq_decode
-from scheduler.kernel._tabu_jit import all_moves, graph_makespan, tabu_run
+from scheduler.kernel._tabu_jit import SearchArrays, all_moves, graph_makespan, tabu_run
 from scheduler.search import Evaluator, Solution, priority_order
 from scheduler.tabu import (
     GRAPH_CONFIGS,
@@ -98,21 +98,7 @@ def test_insertion_makespans_are_exact(seed: int, fast: bool) -> None:
     ev = Evaluator(p)
     sol = _state(ev, seed)
     g, choice, seq, seq_n = _arrays(ev, sol)
-    rows = all_moves(
-        g.pp,
-        g.pi,
-        g.sp,
-        g.si,
-        g.rel,
-        g.avail,
-        g.tm_ptr,
-        g.tm_arm,
-        g.tm_dur,
-        choice,
-        seq,
-        seq_n,
-        fast,
-    )
+    rows = all_moves(g.arrays, choice, seq, seq_n, fast)
     got = {(int(r[0]), int(r[1]), int(r[3])): float(r[4]) for r in rows}
     assert got
     arm = g.tm_arm[g.tm_ptr[:-1] + choice]
@@ -155,9 +141,9 @@ def _run(fn, ev: Evaluator, sol, cfg: GraphConfig, iters: int):  # type: ignore[
     rs = np.array([12345], dtype=np.uint64)
     ctl = np.zeros(3, dtype=np.int64)
     fctl = np.array([sol.makespan, sol.makespan, 0.0])
+    state = SearchArrays(choice, seq, seq_n, *b, tabu, rs, ctl, fctl)
     done = fn(
-        g.pp, g.pi, g.sp, g.si, g.rel, g.avail, g.tm_ptr, g.tm_arm, g.tm_dur,
-        choice, seq, seq_n, *b, tabu, rs, ctl, fctl,
+        g.arrays, state,
         iters, cfg.tenure, cfg.tenure_span, 50, 3, cfg.style, cfg.rank, cfg.top,
     )  # fmt: skip
     return done, choice, seq, seq_n, b, tabu, rs, ctl, fctl
@@ -293,9 +279,7 @@ def test_graph_makespan_reference_in_numpy() -> None:
             cands.append(head[prev[i - 1]] + dur[prev[i - 1]])
         head[t] = max(cands)
     ref = float((head + dur).max())
-    assert graph_makespan(
-        g.pp, g.pi, g.sp, g.si, g.rel, g.avail, g.tm_arm[idx], dur, seq, seq_n
-    ) == pytest.approx(ref)
+    assert graph_makespan(g.arrays, g.tm_arm[idx], dur, seq, seq_n) == pytest.approx(ref)
 
 
 def test_fjsp_up_to_portfolio_size_races_cpsat_for_the_proof() -> None:
