@@ -421,12 +421,26 @@ def _move_after(
     return out
 
 
+def _before_ok(pos: IntArray, t: int, x: int, preds: tuple[tuple[int, ...], ...]) -> bool:
+    """Whether :func:`_move_before` of ``t`` before ``x`` keeps precedence."""
+    i, j = int(pos[t]), int(pos[x])
+    return i > j and all(pos[q] < j for q in preds[t])
+
+
+def _after_ok(pos: IntArray, x: int, t: int, succs: tuple[tuple[int, ...], ...]) -> bool:
+    """Whether :func:`_move_after` of ``x`` after ``t`` keeps precedence."""
+    j, i = int(pos[x]), int(pos[t])
+    return j < i and all(pos[s] > i for s in succs[x])
+
+
 def neighbours(
     ev: Evaluator, sol: Solution, rng: np.random.Generator
-) -> list[tuple[IntArray, IntArray]]:
+) -> list[Callable[[], tuple[IntArray, IntArray]]]:
     """Candidate moves around the critical chain of ``sol`` (read from its
     decoded state by the compiled :func:`scheduler.kernel.critical_chain`),
-    shuffled (frozen tasks and disallowed modes left alone)."""
+    shuffled (frozen tasks and disallowed modes left alone). Each move is a
+    function that builds its (order, modes) when called: a first-improvement
+    search builds only the few it decodes."""
     p = ev.problem
     frozen = ev.frozen
     allowed = ev.allowed
@@ -439,33 +453,54 @@ def neighbours(
     chain = critical_chain(ev.inst, st, rng)
     pos = np.full(p.n_tasks, -1, dtype=np.int64)
     pos[sol.order] = np.arange(len(sol.order))
-    moves: list[tuple[IntArray, IntArray]] = []
+    order, current = sol.order, sol.modes
+    moves: list[Callable[[], tuple[IntArray, IntArray]]] = []
 
     def ok_mode(m: int) -> bool:
         return allowed is None or bool(allowed[m])
+
+    def with_mode(t: int, m: int) -> Callable[[], tuple[IntArray, IntArray]]:
+        def make() -> tuple[IntArray, IntArray]:
+            modes = current.copy()
+            modes[t] = m
+            return order, modes
+
+        return make
+
+    def before(t: int, x: int) -> Callable[[], tuple[IntArray, IntArray]]:
+        def make() -> tuple[IntArray, IntArray]:
+            o = _move_before(order, pos, t, x, p.task_preds)
+            if o is None:  # pragma: no cover - checked by _before_ok
+                raise InternalError("a checked move broke precedence")
+            return o, current
+
+        return make
+
+    def after(x: int, t: int) -> Callable[[], tuple[IntArray, IntArray]]:
+        def make() -> tuple[IntArray, IntArray]:
+            o = _move_after(order, pos, x, t, p.task_succs)
+            if o is None:  # pragma: no cover - checked by _after_ok
+                raise InternalError("a checked move broke precedence")
+            return o, current
+
+        return make
 
     for t, reason, by in chain:
         if t in frozen:
             continue
         for m in p.task_modes[t]:
-            if m != sol.modes[t] and ok_mode(m):
-                modes = sol.modes.copy()
-                modes[t] = m
-                moves.append((sol.order, modes))
+            if m != current[t] and ok_mode(m):
+                moves.append(with_mode(t, m))
         if reason in ("arm", "resource") and by >= 0 and by not in frozen:
-            o = _move_before(sol.order, pos, t, by, p.task_preds)
-            if o is not None:
-                moves.append((o, sol.modes))
-            o = _move_after(sol.order, pos, by, t, p.task_succs)
-            if o is not None:
-                moves.append((o, sol.modes))
+            if _before_ok(pos, t, by, p.task_preds):
+                moves.append(before(t, by))
+            if _after_ok(pos, by, t, p.task_succs):
+                moves.append(after(by, t))
             if reason == "resource":
                 # or let the blocker go elsewhere
                 for m in p.task_modes[by]:
-                    if m != sol.modes[by] and ok_mode(m):
-                        modes = sol.modes.copy()
-                        modes[by] = m
-                        moves.append((sol.order, modes))
+                    if m != current[by] and ok_mode(m):
+                        moves.append(with_mode(by, m))
     idx = rng.permutation(len(moves))
     return [moves[i] for i in idx]
 
@@ -529,9 +564,10 @@ def local_search(
         improved = False
         moves = neighbours(ev, cur, rng)
         budget.prep = time.perf_counter() - tp
-        for order, modes in moves:
+        for make in moves:
             if out_of_budget():
                 break
+            order, modes = make()
             cand = ev.evaluate_resume(order, modes)
             if cand is None:
                 continue
