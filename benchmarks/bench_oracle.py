@@ -11,9 +11,10 @@ simple deterministic oracle attached:
 * **no oracle, chronological**: the same, chronological (what the oracle forces);
 * **cold cache**: a fresh table each decode (the oracle is asked for every
   answer the decode needs);
-* **warm cache**: every answer known (the steady state of a search);
-* **Python loop**: the previous decoder, a Python loop over tasks and modes
-  with a dict cache (``scheduler.search.Evaluator``'s own blocking path), warm.
+* **warm cache**: every answer known (the steady state of a search).
+
+(Every decoder of the package now reads the compiled table; the former
+Python loop with a dict cache is gone, so it has no column any more.)
 
 The target is warm <= 2x no oracle. A thin wrapper of the sweep
 ``benchmarks/sweeps/oracle.toml`` (one ``benchmark`` run of :func:`measure`
@@ -36,7 +37,7 @@ from benchmarks.common import best_rate, table_main
 from scheduler.generate import random_problem
 from scheduler.kernel import compiled, decode, warm_up
 from scheduler.problem import Problem
-from scheduler.search import Evaluator, priority_order
+from scheduler.search import priority_order
 
 NAME = "oracle"
 
@@ -60,9 +61,7 @@ def _with_oracle(p: Problem) -> Problem:
     return dataclasses.replace(p, blocking=HashOracle())
 
 
-def measure(
-    seed: int, size: list[int] | tuple[int, ...], repeat: int, python_loop: bool = True
-) -> dict[str, Any]:
+def measure(seed: int, size: list[int] | tuple[int, ...], repeat: int) -> dict[str, Any]:
     """Decodes per second of one problem in each setting (one row of the table)."""
     kernel_load = warm_up()  # compile or load before any timing (once per process)
     size = list(size)
@@ -105,17 +104,12 @@ def measure(
     # warm: the same problem again and again
     q = _with_oracle(plain)
     inst = compiled(q)
-    code, st_warm = decode(inst, order, free)
+    code, _st = decode(inst, order, free)
     assert code == 0
     calls = q.blocking.calls  # type: ignore[union-attr]
     row["warm"], _ = best_rate(run(lambda: decode(inst, order, free), 20), repeat)
     row["oracle_calls_warm"] = q.blocking.calls - calls  # type: ignore[union-attr]
     row["warm_over_plain"] = row["plain"] / row["warm"]
-    if python_loop:
-        ev = Evaluator(q)
-        ok, st_py = ev.decode(order, free)
-        assert ok and np.array_equal(st_py.t_start, st_warm.t_start), "decoders disagree"
-        row["python_loop"], _ = best_rate(run(lambda: ev.decode(order, free), 1), 2)
     return row
 
 
@@ -128,19 +122,17 @@ def table(m: Any) -> str:
         f"Full decodes per second (best of {', '.join(map(str, sorted(set(m['repeat']))))}), "
         f"{size} (arms x tasks x zones x tools), `scheduler.generate.random_problem`, a "
         "deterministic oracle (`HashOracle` in the script). Cold: a fresh answer table per "
-        "decode (the oracle is asked every answer the decode needs); warm: every answer known; "
-        "Python loop: the previous decoder (`Evaluator`'s own loop with a dict cache), warm. "
+        "decode (the oracle is asked every answer the decode needs); warm: every answer known. "
         "Target: warm within 2x of no oracle.",
         "",
         "| seed | no oracle /s | no oracle, chrono /s | cold /s (oracle calls) | warm /s | "
-        "no oracle / warm | Python loop /s |",
-        "|---|---|---|---|---|---|---|",
+        "no oracle / warm |",
+        "|---|---|---|---|---|---|",
     ]
     for _, r in m.iterrows():
         lines.append(
             f"| {r['seed']} | {r['plain']:.1f} | {r['plain_chrono']:.1f} | {r['cold']:.1f} "
-            f"({r['oracle_calls_cold']}) | {r['warm']:.1f} | {r['warm_over_plain']:.2f}x | "
-            f"{r.get('python_loop', float('nan')):.2f} |"
+            f"({r['oracle_calls_cold']}) | {r['warm']:.1f} | {r['warm_over_plain']:.2f}x |"
         )
     lines += [
         "",
