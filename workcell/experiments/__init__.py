@@ -17,9 +17,10 @@
   time to target, scaling and box plots, and the benchmark tables (imported
   on its own: it needs matplotlib).
 
-The command ``multiarm sweep FILE [--scheduler ADDRESS] [--workers N]`` runs a sweep file.
+The command ``multiarm sweep FILE [--dask-address ADDRESS] [--workers N]`` runs a sweep file.
 """
 
+from workcell.experiments.executors import check_dask_address
 from workcell.experiments.results import COLUMNS, read_results, write_results
 from workcell.experiments.sweep import (
     BENCHMARK,
@@ -46,6 +47,7 @@ __all__ = [
     "SweepOutcome",
     "benchmark_function",
     "build_problem",
+    "check_dask_address",
     "load_sweep",
     "parse_sweep",
     "read_results",

@@ -2,7 +2,7 @@
 
 :func:`run_sweep` runs every run not yet recorded in the results (an
 interrupted sweep resumes where it stopped), in a local process pool by
-default or on a Dask cluster (``scheduler="tcp://host:8786"`` or a
+default or on a Dask cluster (``dask_address="tcp://host:8786"`` or a
 ``distributed.Client``); results stream to a journal as they finish and end
 up in one Parquet file. A run that raises is recorded with status
 ``"error"`` and its message; the others go on.
@@ -13,8 +13,10 @@ from __future__ import annotations
 import math
 import multiprocessing
 import os
+import re
 import signal
 import time
+import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
@@ -28,7 +30,7 @@ from workcell.experiments.results import Journal, error_row, read_results
 from workcell.experiments.runner import run_one
 from workcell.experiments.spec import load_sweep
 
-__all__ = ["SweepOutcome", "run_sweep"]
+__all__ = ["SweepOutcome", "check_dask_address", "run_sweep"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -127,6 +129,51 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+_ADDRESS = re.compile(
+    r"^(?:(tcp|tls|inproc|ucx|ws|wss)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+)(?::(\d{1,5}))?$"
+)
+
+
+def check_dask_address(address: str) -> str:
+    """``address`` if it is a Dask scheduler address, else a clear error.
+
+    Accepts ``[protocol://]host[:port]`` with a protocol Dask knows (``tcp``,
+    ``tls``, ``inproc``, ``ucx``, ``ws``, ``wss``) and a port in 1-65535;
+    this is checked before any run starts, so a typo never reaches Dask's
+    own parser.
+
+    Parameters
+    ----------
+    address : str
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    UsageError
+        Not of that form (the message shows the form expected).
+
+    Examples
+    --------
+    >>> check_dask_address("tcp://10.0.0.5:8786")
+    'tcp://10.0.0.5:8786'
+    >>> check_dask_address("tcp//host")
+    Traceback (most recent call last):
+    ...
+    multiarm.errors.UsageError: --dask-address: 'tcp//host' is not a Dask scheduler address (expected [protocol://]host[:port], e.g. tcp://host:8786)
+    """
+    m = _ADDRESS.match(address) if isinstance(address, str) else None
+    port = m.group(3) if m else None
+    if m is None or (port is not None and not 1 <= int(port) <= 65535):
+        raise UsageError(
+            f"--dask-address: {address!r} is not a Dask scheduler address "
+            "(expected [protocol://]host[:port], e.g. tcp://host:8786)"
+        )
+    return address
+
+
 def _iter_dask(pending: Sequence[Run], scheduler: Any) -> Iterator[dict[str, Any]]:
     try:
         from distributed import Client, as_completed
@@ -140,7 +187,7 @@ def _iter_dask(pending: Sequence[Run], scheduler: Any) -> Iterator[dict[str, Any
             client = Client(scheduler, timeout="20s")  # type: ignore[no-untyped-call]
         except (OSError, TimeoutError) as exc:
             raise UsageError(
-                f"--scheduler: cannot reach the Dask scheduler at {scheduler!r}: {exc}"
+                f"--dask-address: cannot reach the Dask scheduler at {scheduler!r}: {exc}"
             ) from None
     else:
         client = scheduler
@@ -167,12 +214,13 @@ def _iter_dask(pending: Sequence[Run], scheduler: Any) -> Iterator[dict[str, Any
 def run_sweep(
     sweep: Sweep | str | PathLike[str],
     *,
-    scheduler: Any = None,
+    dask_address: Any = None,
     workers: int | None = None,
     out: str | PathLike[str] | None = None,
     progress: bool = True,
     retry_failed: bool = False,
     on_row: Callable[[dict[str, Any]], None] | None = None,
+    scheduler: Any = None,
 ) -> SweepOutcome:
     """Run every run of a sweep not yet recorded in its results.
 
@@ -180,8 +228,9 @@ def run_sweep(
     ----------
     sweep : Sweep, str or path-like
         A sweep, or the path of a sweep file.
-    scheduler : str, distributed.Client or None
-        A Dask scheduler's address (``"tcp://host:8786"``) or a connected
+    dask_address : str, distributed.Client or None
+        A Dask scheduler's address (``"tcp://host:8786"``, checked by
+        :func:`check_dask_address` before anything runs) or a connected
         client: run on that cluster. ``None`` (default): a local process pool.
     workers : int or None
         Local processes (default: the sweep file's ``workers``, else the CPU
@@ -195,6 +244,8 @@ def run_sweep(
         Run again the runs recorded with status ``"error"``.
     on_row : callable, optional
         Called with each results row as it arrives.
+    scheduler : str, distributed.Client or None
+        Deprecated name of ``dask_address`` (*scheduler* names the package).
 
     Returns
     -------
@@ -208,6 +259,16 @@ def run_sweep(
         After writing every run finished so far (the next call resumes).
     """
     t0 = time.perf_counter()
+    if scheduler is not None:
+        warnings.warn(
+            "run_sweep(scheduler=...) is deprecated: use dask_address=",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        if dask_address is None:
+            dask_address = scheduler
+    if isinstance(dask_address, str):
+        check_dask_address(dask_address)
     spec = sweep if isinstance(sweep, Sweep) else load_sweep(sweep)
     if workers is None:
         workers = spec.workers or os.cpu_count() or 1
@@ -222,7 +283,7 @@ def run_sweep(
     bar = _progress_bar(len(runs), skipped, progress and bool(pending), spec.name)
     ran = failed = 0
     rows: Iterable[dict[str, Any]] = (
-        _iter_local(pending, workers) if scheduler is None else _iter_dask(pending, scheduler)
+        _iter_local(pending, workers) if dask_address is None else _iter_dask(pending, dask_address)
     )
     try:
         for row in rows:
