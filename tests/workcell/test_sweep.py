@@ -372,3 +372,21 @@ def test_the_old_scheduler_keyword_still_works_and_warns(tmp_path: Path) -> None
         pytest.raises(UsageError, match="dask-address"),
     ):
         run_sweep(sweep, scheduler="tcp//bad", out=tmp_path / "r.parquet", progress=False)
+
+
+def test_an_unwritable_or_directory_output_is_refused_before_any_run(tmp_path: Path) -> None:
+    from workcell.experiments import parse_sweep, run_sweep
+
+    sweep = parse_sweep(
+        '[sweep]\nname = "t"\n[[instances]]\nkind = "generated"\nsizes = [[2, 4, 1, 0]]\n'
+        'seeds = [0]\n[[solvers]]\nsolver = "greedy"\n',
+        filename="t.toml",
+    )
+    rows: list[Any] = []
+    with pytest.raises(UsageError, match="is a directory"):
+        run_sweep(sweep, out=tmp_path, progress=False, workers=1, on_row=rows.append)
+    blocker = tmp_path / "file"
+    blocker.write_text("keep me")
+    with pytest.raises(UsageError, match="cannot create the folder"):
+        run_sweep(sweep, out=blocker / "r.parquet", progress=False, workers=1, on_row=rows.append)
+    assert rows == [] and blocker.read_text() == "keep me"

@@ -487,6 +487,32 @@ def _read_journal_rows(path: Path) -> list[dict[str, Any]]:
     return rows
 
 
+def check_output(path: Path) -> None:
+    """Refuse a results path that cannot be written, before any run starts.
+
+    Raises
+    ------
+    UsageError
+        ``path`` is a directory, its folder cannot be created, or the folder
+        or an existing file is not writable (the message names the path).
+    """
+    if path.is_dir():
+        raise UsageError(
+            f"--out: {path} is a directory; give a results file such as {path / 'results.parquet'}"
+        )
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(
+            f"--out: cannot create the folder of {path}: {exc.strerror or exc}"
+        ) from None
+    if not path.parent.is_dir() or not os.access(path.parent, os.W_OK | os.X_OK):
+        raise UsageError(f"--out: cannot write in {path.parent}")
+    for p in (path, path.with_name(path.name + ".journal")):
+        if p.exists() and (p.is_dir() or not os.access(p, os.W_OK)):
+            raise UsageError(f"--out: {p} exists and cannot be written")
+
+
 class Journal:
     """The results of one sweep: the Parquet file and its journal of new rows.
 
@@ -506,6 +532,7 @@ class Journal:
     def __init__(self, path: str | os.PathLike[str], sweep: str) -> None:
         self.path = Path(path)
         self.journal = self.path.with_name(self.path.name + ".journal")
+        check_output(self.path)
         self.sweep = sweep
         self.rows: list[dict[str, Any]] = []
         if self.path.exists():
