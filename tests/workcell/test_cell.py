@@ -277,3 +277,36 @@ def test_oracle_detours_are_collision_free_and_cost_their_extra_time() -> None:
     before = o.stats.queries - o.stats.cached
     assert o.cost(m, b, pose) == c
     assert o.stats.queries - o.stats.cached == before
+
+
+# ------------------------------------------------------------------ poses
+
+
+def test_the_readme_c_style_example_compiles_in_a_cell_of_gantries_and_scaras() -> None:
+    """A bare (x, y, z) points the tool down, the pose gantries and SCARAs reach (issue 18)."""
+    import re
+
+    from tasklib import TaskSet
+    from workcell import Cell
+    from workcell.arms import arm_from_dict
+    from zones import parse_sdl
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    block = next(b for b in re.findall(r"```python\n(.*?)```", readme, flags=re.S) if "capi" in b)
+    assert "(0.5, 0.5, 0.1)" in block  # a bare 3-tuple pose
+    namespace: dict[str, object] = {}
+    exec(compile(block, "README.md", "exec"), namespace)
+    taskset = namespace["taskset"]
+    assert isinstance(taskset, TaskSet)
+    zone_map = parse_sdl("cell (-1, -1, 0) (2, 2, 1.5)\n", "empty.sdl")
+    rails = {"x": [0.0, 1.0], "y": [0.0, 1.0], "z": [0.0, 0.4]}
+    caps = ["gripper", "force_sensor"]
+    gantry = arm_from_dict("g", {"type": "gantry", "rails": rails, "capabilities": caps}, "g")
+    base = [0.9, 0.5, 0.0, math.pi]
+    scara = arm_from_dict("s", {"type": "scara", "base": base, "capabilities": caps}, "s")
+    for arms in ((gantry,), (scara,)):
+        cell = Cell("readme", taskset, zone_map, arms, separate_arms=False)
+        cc = compile_cell_detailed(cell)
+        assert {cc.problem.arm_names[int(a)] for a in cc.problem.mode_arm} == {
+            a.name for a in arms
+        }, cc.rejected
