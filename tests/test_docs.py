@@ -113,3 +113,38 @@ def test_the_docs_site_builds_with_warnings_as_errors(tmp_path: Path) -> None:
     assert "gantt" in tutorial and (site / "tutorials" / "tutorial.ipynb").is_file()
     bench = (site / "benchmarks" / "index.html").read_text()
     assert "mk01" in bench  # the stored tables are included
+
+
+def test_the_task_set_file_example_of_tasklib_md_loads(tmp_path: Path) -> None:
+    from tasklib import load_taskset, pose, save_taskset
+
+    block = re.findall(r"```toml\n(.*?)```", (DOCS / "tasklib.md").read_text(), flags=re.S)[0]
+    path = tmp_path / "pins.toml"
+    path.write_text(block, encoding="utf-8")
+    ts = load_taskset(path)
+    assert [t.id for t in ts.tasks] == ["place_base", "insert_pin", "screw_cap"]
+    assert ts.tasks[1].steps[2].target == pose(0.8, 0.5, 0.08)  # type: ignore[union-attr]
+    assert load_taskset(save_taskset(ts, tmp_path / "again.toml")) == ts
+
+
+def test_the_step_table_of_tasklib_md_is_the_records() -> None:
+    """Every step kind's keys and defaults in docs/tasklib.md are the dataclasses' own."""
+    import dataclasses
+    import tomllib
+
+    from tasklib.steps import STEP_KINDS
+
+    text = (DOCS / "tasklib.md").read_text()
+    table = text[text.index("**Steps**") : text.index("**`[[parts]]`**")]
+    rows = dict(re.findall(r"^\| `(\w+)` \| (.*) \|$", table, flags=re.M))
+    rows.pop("kind", None)  # the header
+    assert set(rows) == set(STEP_KINDS)
+    for kind, cls in STEP_KINDS.items():
+        row = rows[kind]
+        for f in dataclasses.fields(cls):
+            if f.name in ("line", "column") or f.name.startswith("_"):
+                continue
+            assert f"`{f.name}" in row, (kind, f.name)
+            written = re.search(rf"`{f.name} = ([^`]+)`", row)
+            if written and f.default is not dataclasses.MISSING:
+                assert tomllib.loads(f"v = {written.group(1)}")["v"] == f.default, (kind, f.name)
