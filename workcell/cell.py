@@ -135,6 +135,12 @@ class Cell:
         if not self.arms:
             raise ValidationError(f"cell {self.name!r} has no arm")
         names = [a.name for a in self.arms]
+        for n in names:
+            if not isinstance(n, str) or not n.strip() or "|" in n or "/" in n:
+                raise ValidationError(
+                    f"cell {self.name!r}: an arm's name must be non-empty text without '|' or "
+                    f"'/', got {n!r}"
+                )
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise ValidationError(f"cell {self.name!r} has two arms named {dup[0]!r}")

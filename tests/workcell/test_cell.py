@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from multiarm.errors import FormatError, NoFeasibleSchedule, ValidationError
 from scheduler import solve, validate
@@ -310,3 +312,106 @@ def test_the_readme_c_style_example_compiles_in_a_cell_of_gantries_and_scaras() 
         assert {cc.problem.arm_names[int(a)] for a in cc.problem.mode_arm} == {
             a.name for a in arms
         }, cc.rejected
+
+
+# ------------------------------------------------- physical ranges of arm keys
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (
+            "link_lengths = [1e300, 0.3]\n",
+            r"cell\.toml: arms\.a\.link_lengths: 1e\+300 is out of range: .* \[1e-06, 100\] m",
+        ),
+        ("max_velocity = [1e-300, 4, 1, 6]\n", r"arms\.a\.max_velocity: 1e-300 is out of range"),
+        ("max_acceleration = [10, 1e9, 5, 30]\n", r"arms\.a\.max_acceleration: 1e\+09 is out"),
+        ("payload = 1e300\n", r"arms\.a\.payload: 1e\+300 is out of range: .* kg"),
+        ("radius = 1e-300\n", r"arms\.a\.radius: 1e-300 is out of range"),
+        ("z_range = [0, 1e300]\n", r"arms\.a\.z_range: 1e\+300 is out of range"),
+        ("joint_limits = [[-1e300, 1], [-1, 1], [0, 0.3], [-1, 1]]\n", r"arms\.a\.joint_limits"),
+    ],
+)
+def test_numbers_outside_their_physical_range_are_refused_by_field(
+    tmp_path: Path, extra: str, message: str
+) -> None:
+    body = GOOD.replace("base = [-0.5, -0.5, 0.0, 0.785]", "base = [1e300, 0, 0, 0]")
+    with pytest.raises(ValidationError, match=r"arms\.a\.base: 1e\+300 is out of range"):
+        load_cell(_cell_file(tmp_path, body))
+    with pytest.raises(ValidationError, match=message):
+        load_cell(_cell_file(tmp_path, GOOD + extra))
+
+
+GANTRY = """
+name = "g"
+zones = "builtin:supersigma"
+tasks = "builtin:supersigma"
+[arms.a]
+type = "gantry"
+rails = { x = [0.0, 1.0], y = [0.0, 1.0], z = [0.0, 0.5] }
+[arms.a.stepper]
+"""
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        ("step_length = 1e-300\n", r"arms\.a\.stepper\.step_length: 1e-300 is out of range"),
+        ("max_rate = 1e300\n", r"arms\.a\.stepper\.max_rate: 1e\+300 is out of range"),
+        ("curves = { light = 1e-300 }\n", r"arms\.a\.stepper\.curves\.light: 1e-300 is out"),
+        (
+            "step_length = 1e-9\nmax_rate = 10\nlow_rate = 1\n",
+            r"arms\.a\.stepper: top speed max_rate x step_length = 1e-08 m/s is out of range",
+        ),
+        ("short_steps = 10000000000\n", r"arms\.a\.stepper\.short_steps: 1e\+10 is out"),
+    ],
+)
+def test_stepper_numbers_outside_their_range_are_refused(
+    tmp_path: Path, extra: str, message: str
+) -> None:
+    with pytest.raises(ValidationError, match=message):
+        load_cell(_cell_file(tmp_path, GANTRY + extra))
+
+
+def test_empty_capabilities_stay_empty_and_a_nameless_arm_is_refused(tmp_path: Path) -> None:
+    cell = load_cell(_cell_file(tmp_path, GOOD + "capabilities = []\n"))
+    assert cell.arms[0].capabilities == frozenset()
+    assert load_cell(_cell_file(tmp_path, GOOD)).arms[0].capabilities == {"gripper"}
+    with pytest.raises(ValidationError, match=r"cell\.toml: arms\.: an arm's name must be"):
+        load_cell(_cell_file(tmp_path, GOOD.replace("[arms.a]", '[arms.""]')))
+    with pytest.raises(ValidationError, match=r"arms\.a\|b: an arm's name must be"):
+        load_cell(_cell_file(tmp_path, GOOD.replace("[arms.a]", '[arms."a|b"]')))
+
+
+_EXTREMES = st.one_of(
+    st.sampled_from([1e-300, 1e-12, 1e-7, 1e-6, 1.0, 99.0, 1e6, 1e7, 1e300, -1e300, -1.0, 0.0]),
+    st.floats(-1e8, 1e8, allow_nan=False),
+)
+_SCARA_VECTORS = ("max_velocity", "max_acceleration", "max_jerk", "link_lengths", "z_range")
+_SCARA_SCALARS = ("payload", "radius", "arm_height")
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.sampled_from(_SCARA_VECTORS + _SCARA_SCALARS),
+    st.lists(_EXTREMES, min_size=4, max_size=4),
+)
+def test_scara_numbers_are_refused_by_field_or_give_finite_timings(
+    key: str, values: list[float]
+) -> None:
+    """Hypothesis over the numeric fields, extremes included: either a ValidationError
+    naming the field, or an arm whose move times are finite (no overflow later)."""
+    from workcell.arms import arm_from_dict
+
+    n = 2 if key in ("link_lengths", "z_range") else 4
+    value: object = values[0] if key in _SCARA_SCALARS else values[:n]
+    try:
+        arm = arm_from_dict("a", {"type": "scara", key: value}, "c.toml: arms.a")
+    except ValidationError as exc:
+        assert str(exc).startswith(f"c.toml: arms.a.{key}") or str(exc).startswith(
+            "c.toml: arms.a: "
+        ), str(exc)
+        return
+    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
+    t = arm.move_time(lo, hi)
+    assert math.isfinite(t) and t >= 0.0
