@@ -61,6 +61,7 @@ __all__ = [
     "FORMAT",
     "load_taskset",
     "parse_toml",
+    "read_toml_source",
     "save_taskset",
     "taskset_from_dict",
     "taskset_to_dict",
@@ -422,6 +423,34 @@ def taskset_to_toml(ts: TaskSet) -> str:
 _TOML_POS = re.compile(r"\s*\(at line (\d+), column (\d+)\)")
 
 
+def read_toml_source(path: str | PathLike[str], what: str) -> str:
+    """The UTF-8 text of a TOML file; a :class:`FormatError` naming the file otherwise.
+
+    Undecodable bytes are located (``file:line:col``, the column counted in
+    bytes) and an empty file is an error at ``file:1:1``.
+    """
+    name = fspath(path)
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as exc:
+        raise FormatError(f"cannot read {what} file: {exc.strerror}", filename=name) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise FormatError(
+            f"{what} file is not UTF-8 text (byte 0x{raw[exc.start]:02x}: {exc.reason}); "
+            "save it as UTF-8",
+            filename=name,
+            line=line,
+            column=col,
+        ) from None
+    if not text.strip():
+        raise FormatError(f"the {what} file is empty", filename=name, line=1, column=1)
+    return text
+
+
 def parse_toml(text: str, filename: str) -> dict[str, Any]:
     """Parse TOML text; a syntax error is a :class:`FormatError` at ``file:line:col``.
 
@@ -474,14 +503,7 @@ def load_taskset(path: str | PathLike[str]) -> TaskSet:
     p = Path(path)
     name = fspath(path)
     kind = _format_of(p)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise FormatError(f"cannot read task-set file: {exc.strerror}", filename=name) from None
-    except UnicodeDecodeError as exc:
-        raise FormatError(
-            f"task-set file is not UTF-8 text ({exc.reason})", filename=name
-        ) from None
+    text = read_toml_source(p, "task-set")
     if kind == "toml":
         data: Any = parse_toml(text, name)
     else:

@@ -54,12 +54,11 @@ from typing import Any, Literal
 
 import numpy as np
 
-from multiarm.errors import FormatError, MultiarmError, ValidationError
-from multiarm.text import read_source
+from multiarm.errors import MultiarmError, ValidationError
 from multiarm.types import JointVector
 from tasklib import TaskSet
 from tasklib.examples import EXAMPLES as TASK_EXAMPLES
-from tasklib.io import load_taskset, parse_toml
+from tasklib.io import load_taskset, parse_toml, read_toml_source
 from tasklib.tdl import load_tdl
 from workcell.arms import DriveArm, arm_from_dict
 from zones import ZoneMap, load_sdl
@@ -408,7 +407,7 @@ def load_cell(path: str | PathLike[str]) -> Cell:
     """
     p = Path(path)
     name = fspath(path)
-    text = read_source(path, FormatError, "cell")
+    text = read_toml_source(path, "cell")
     data = parse_toml(text, name)
     return cell_from_dict(data, filename=name, base_dir=p.parent)
 
