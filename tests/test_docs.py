@@ -168,3 +168,53 @@ def test_the_arm_key_reference_of_workcell_md_is_the_metadata() -> None:
             arm_from_dict("a", {"type": kind, "zzz": 1}, "c.toml: arms.a")
         known = re.search(r"\(known: (.*)\)", str(e.value))
         assert known is not None and set(known.group(1).split(", ")) == documented
+
+
+def _lines_match(expected: list[str], actual: list[str]) -> bool:
+    """Whether ``actual`` matches ``expected``, where ``...`` in a line matches any
+    text and a line that is only ``...`` matches any number of lines."""
+    if not expected:
+        return not actual
+    head, rest = expected[0], expected[1:]
+    if head == "...":
+        return any(_lines_match(rest, actual[i:]) for i in range(len(actual) + 1))
+    if not actual:
+        return False
+    pattern = ".*".join(re.escape(part) for part in head.split("..."))
+    return re.fullmatch(pattern, actual[0]) is not None and _lines_match(rest, actual[1:])
+
+
+def test_the_first_cell_page_runs_exactly_as_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """docs/first-cell.md: its files written from its code blocks, its commands run,
+    their outputs compared with the page's (issue 18)."""
+    import shlex
+
+    from workcell.cli import main
+
+    text = (DOCS / "first-cell.md").read_text(encoding="utf-8")
+    files = re.findall(r"^\*\*`([\w.]+)`\*\*\n\n```\w*\n(.*?)```", text, flags=re.S | re.M)
+    assert [name for name, _ in files] == ["cell.sdl", "tasks.toml", "cell.toml", "faults.toml"]
+    monkeypatch.chdir(tmp_path)
+    for name, body in files:
+        (tmp_path / name).write_text(body, encoding="utf-8")
+    sessions = re.findall(r"```console\n(.*?)```", text, flags=re.S)
+    assert len(sessions) == 3
+    for session in sessions:
+        command, *expected = session.rstrip("\n").split("\n")
+        assert command.startswith("$ multiarm ")
+        capsys.readouterr()
+        assert main(shlex.split(command)[2:]) == 0, capsys.readouterr().err
+        actual = [line.rstrip() for line in capsys.readouterr().out.rstrip("\n").split("\n")]
+        expected = [line.rstrip() for line in expected]
+        assert _lines_match(expected, actual), "\n".join([command, *actual])
+    assert (tmp_path / "run" / "tasks.csv").is_file()
+
+
+def test_the_line_matcher_of_the_page_test() -> None:
+    assert _lines_match(["a ... c", "..."], ["a b c", "x", "y"])
+    assert _lines_match(["a", "...", "d"], ["a", "d"])
+    assert not _lines_match(["a ... c"], ["a b d"])
+    assert not _lines_match(["a", "b"], ["a"])
+    assert not _lines_match(["a"], ["a", "b"])
