@@ -10,8 +10,20 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import tasklib
-from multiarm.errors import ValidationError
-from tasklib import DOWN, UP, Pose, capi, pose, quat_from_rpy
+from multiarm.errors import MultiarmError, ValidationError
+from tasklib import (
+    DOWN,
+    UP,
+    Approach,
+    Dwell,
+    ForceSearch,
+    Move,
+    Pose,
+    capi,
+    parse_tdl,
+    pose,
+    quat_from_rpy,
+)
 from tasklib.pose import quat_to_matrix
 
 coords = st.floats(-5.0, 5.0, allow_nan=False)
@@ -62,3 +74,21 @@ def test_pose_accepts_a_quaternion_and_refuses_bad_input_by_name() -> None:
         capi.as_pose((0.0, 1.0))
     with pytest.raises(ValidationError, match="a pose is a Pose or 3"):
         capi.as_pose(0.5)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("build", "message"),
+    [
+        (lambda: Move(target=pose(0, 0, 0), speed=1e-300), r"move speed must be at least 1e-06"),
+        (lambda: Dwell(1e300), r"dwell duration must be at most 1e\+06"),
+        (lambda: Approach(pose(0, 0, 0), 1e300), r"approach distance must be at most 1e\+06"),
+        (lambda: ForceSearch(max_tries=10**9), r"max_tries in \[1, 100000\], got 1000000000"),
+        (
+            lambda: parse_tdl("trajectory t { taught speed 1e-300 { stop (0, 0, 1) } }"),
+            r"speed must be at least 1e-06",
+        ),
+    ],
+)
+def test_extreme_step_numbers_are_refused_by_name(build, message: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(MultiarmError, match=message):  # ValidationError, or TDLError in TDL
+        build()
