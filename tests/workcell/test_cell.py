@@ -387,31 +387,76 @@ _EXTREMES = st.one_of(
     st.sampled_from([1e-300, 1e-12, 1e-7, 1e-6, 1.0, 99.0, 1e6, 1e7, 1e300, -1e300, -1.0, 0.0]),
     st.floats(-1e8, 1e8, allow_nan=False),
 )
-_SCARA_VECTORS = ("max_velocity", "max_acceleration", "max_jerk", "link_lengths", "z_range")
-_SCARA_SCALARS = ("payload", "radius", "arm_height")
+# (section, key) -> how many numbers (0: one number)
+_NUMERIC_FIELDS = {
+    ("scara", "max_velocity"): 4,
+    ("scara", "max_acceleration"): 4,
+    ("scara", "max_jerk"): 4,
+    ("scara", "link_lengths"): 2,
+    ("scara", "z_range"): 2,
+    ("scara", "payload"): 0,
+    ("scara", "radius"): 0,
+    ("scara", "arm_height"): 0,
+    ("scara", "base"): 4,
+    ("gantry", "height"): 0,
+    ("gantry", "hand"): 3,
+    ("gantry", "yaw_limits"): 2,
+    ("gantry.stepper", "step_length"): 0,
+    ("gantry.stepper", "max_rate"): 0,
+    ("gantry.stepper", "low_rate"): 0,
+    ("gantry.stepper", "stop_accel"): 0,
+    ("serial", "max_velocity"): 6,
+    ("serial", "max_acceleration"): 6,
+    ("serial", "max_jerk"): 6,
+    ("serial", "radius"): 0,
+}
 
 
-@settings(max_examples=150, deadline=None)
-@given(
-    st.sampled_from(_SCARA_VECTORS + _SCARA_SCALARS),
-    st.lists(_EXTREMES, min_size=4, max_size=4),
-)
-def test_scara_numbers_are_refused_by_field_or_give_finite_timings(
-    key: str, values: list[float]
+@settings(max_examples=200, deadline=None)
+@given(st.sampled_from(sorted(_NUMERIC_FIELDS)), st.lists(_EXTREMES, min_size=6, max_size=6))
+def test_arm_numbers_are_refused_by_field_or_give_finite_timings(
+    field: tuple[str, str], values: list[float]
 ) -> None:
-    """Hypothesis over the numeric fields, extremes included: either a ValidationError
-    naming the field, or an arm whose move times are finite (no overflow later)."""
+    """Hypothesis over the cell file's numeric arm fields, extremes included: either a
+    ValidationError naming the field, or an arm whose move times are finite (no
+    overflow later)."""
     from workcell.arms import arm_from_dict
 
-    n = 2 if key in ("link_lengths", "z_range") else 4
-    value: object = values[0] if key in _SCARA_SCALARS else values[:n]
+    section, key = field
+    n = _NUMERIC_FIELDS[field]
+    value: object = values[0] if n == 0 else values[:n]
+    data: dict[str, object] = {"type": section.split(".")[0]}
+    if data["type"] == "gantry":
+        data["rails"] = {"x": [0.0, 1.0], "y": [0.0, 1.0], "z": [0.0, 0.5]}
+    if data["type"] == "serial":
+        data["example"] = "6dof"
+    if section == "gantry.stepper":
+        data["stepper"] = {key: value}
+        path = "c.toml: arms.a.stepper"
+    else:
+        data[key] = value
+        path = f"c.toml: arms.a.{key}"
     try:
-        arm = arm_from_dict("a", {"type": "scara", key: value}, "c.toml: arms.a")
+        arm = arm_from_dict("a", data, "c.toml: arms.a")
     except ValidationError as exc:
-        assert str(exc).startswith(f"c.toml: arms.a.{key}") or str(exc).startswith(
-            "c.toml: arms.a: "
-        ), str(exc)
+        text = str(exc)
+        assert text.startswith(path) or text.startswith("c.toml: arms.a: "), text
         return
     lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
-    t = arm.move_time(lo, hi)
-    assert math.isfinite(t) and t >= 0.0
+    for q1 in (hi, lo + (hi - lo) * 1e-3):
+        t = arm.move_time(lo, q1)
+        assert math.isfinite(t) and 0.0 <= t < 1e9
+
+
+def test_the_6dof_example_takes_its_keys_instead_of_failing_or_ignoring_them() -> None:
+    from workcell.arms import arm_from_dict
+
+    base = {"type": "serial", "example": "6dof"}
+    arm = arm_from_dict("r", {**base, "joint_limits": [[-3.0, 3.0]] * 6}, "c.toml: arms.r")
+    assert arm.joint_limits.tolist() == [[-3.0, 3.0]] * 6  # was a TypeError
+    arm = arm_from_dict("r", {**base, "radius": 0.2}, "c.toml: arms.r")
+    assert arm.shapes[-1].size == (0.2,)  # was silently ignored
+    with pytest.raises(ValidationError, match=r"c\.toml: arms\.r\.kinds: the 6dof example"):
+        arm_from_dict("r", {**base, "kinds": ["revolute"] * 6}, "c.toml: arms.r")
+    with pytest.raises(ValidationError, match=r"c\.toml: arms\.r: serial arm 'r': home"):
+        arm_from_dict("r", {**base, "joint_limits": [[-0.1, 0.1]] * 6}, "c.toml: arms.r")

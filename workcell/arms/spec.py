@@ -620,9 +620,16 @@ def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
             for key in ("max_velocity", "max_acceleration", "max_jerk"):
                 if (v := f.numbers(key, 6, positive=True)) is not None:
                     kw[key] = v
+            if "kinds" in data:
+                raise f.fail("kinds", "the 6dof example has its own joint kinds: leave 'kinds' out")
             if (jl := f.pairs("joint_limits", 6)) is not None:
                 kw["joint_limits"] = jl
-            return SerialArm.example_6dof(name, **kw, **common)
+            if (r := f.number("radius", positive=True)) is not None:
+                kw["radius"] = r
+            try:
+                return SerialArm.example_6dof(name, **kw, **common)
+            except ValidationError as exc:
+                raise ValidationError(f"{where}: {exc}") from None
         dh = data.get("dh")
         if not isinstance(dh, list) or not dh:
             raise f.fail("dh", f"expected rows of [a, alpha, d, offset], got {dh!r}")
