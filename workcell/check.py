@@ -16,7 +16,8 @@ zone and each tool; and warnings for what compiles but is likely a mistake:
 (``--json``), exit status 0 when every file is clean or has warnings only,
 1 on an error.
 
-A ``.toml`` file is a task set when its top level holds a ``tasks`` list or
+A built-in cell's name (``supersigma``, ``scara4``, ``cell8``) is explained
+like a cell file. A ``.toml`` file is a task set when its top level holds a ``tasks`` list or
 a ``format`` tag, and a cell file otherwise, so that an empty, undecodable
 or broken cell file is reported as the cell file it was meant to be
 (``cell.toml:3:9: TOML syntax error: ...``).
@@ -320,6 +321,10 @@ def _check_scheduling(path: Path, kind: str, problem_name: str | None) -> str:
 
 def _kind(path: Path) -> str:
     from scheduler import detect_format
+    from workcell.cell import EXAMPLES
+
+    if not path.exists() and str(path) in EXAMPLES:
+        return "builtin cell"
 
     kind = detect_format(path) if path.is_file() else None
     if kind is not None:
@@ -338,10 +343,10 @@ def check_file(path: Path, problem_name: str | None = None) -> FileReport:
     try:
         if kind in ("fjsp", "problem", "schedule"):
             return FileReport(str(path), kind, True, _check_scheduling(path, kind, problem_name))
-        if kind == "cell":
-            from workcell.cell import load_cell
+        if kind in ("cell", "builtin cell"):
+            from workcell.cell import load_cell, load_example
 
-            cell = load_cell(path)
+            cell = load_example(str(path)) if kind == "builtin cell" else load_cell(path)
             report = explain_cell(cell)
             summary = (
                 f"cell {cell.name!r}: {len(cell.arms)} arms, {report.n_tasks} tasks, "

@@ -23,7 +23,8 @@ Sub-commands:
     ``.sdl`` (zones), ``.json`` and ``.toml`` (a task set when it holds a
     ``tasks`` list, else a cell file, compiled and explained: per arm the
     tasks it can do and why not the others, zones and tools with their users,
-    warnings). ``--json`` prints one machine-readable report.
+    warnings); a built-in cell's name is explained too. ``--json`` prints one
+    machine-readable report.
 ``schedule PROBLEM``
     Solve a scheduling problem (``.json`` written by ``save_problem``, an
     FJSPLIB file, a cell file, or a built-in cell's name) and print the

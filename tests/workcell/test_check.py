@@ -182,3 +182,10 @@ def test_a_task_set_toml_is_still_checked_as_a_task_set(
 )
 def test_reason_categories(reason: str, category: str) -> None:
     assert reason_category(reason) == category
+
+
+def test_a_builtin_cell_is_checked_by_name(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["check", "supersigma"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("supersigma: ok (cell 'supersigma': 2 arms, 10 tasks")
+    assert "    right scan_board (capability): lacks capability 'object_detector'" in out
