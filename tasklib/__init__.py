@@ -10,6 +10,8 @@ done, never *which arm* does it:
   :class:`TaskSet`;
 * the procedural, C-style API of the paper's task library:
   :mod:`tasklib.capi` (``task_open``, ``task_move``, ..., ``task_close``);
+* poses: :class:`Pose` and :func:`pose` (``pose(x, y, z)``: the tool points
+  :data:`DOWN`, as a bare ``(x, y, z)`` does wherever a pose is accepted);
 * TDL, the trajectory description language: :func:`parse_tdl`,
   :func:`load_tdl`, :func:`print_tdl`;
 * files: :func:`load_taskset` / :func:`save_taskset` (TOML or JSON, exact
@@ -31,7 +33,7 @@ from tasklib.arrivals import (
 from tasklib.examples import EXAMPLES, generate_taskset, load_example
 from tasklib.io import load_taskset, save_taskset, taskset_from_dict, taskset_to_dict
 from tasklib.model import Part, PartGroup, Task, TaskSet
-from tasklib.pose import Pose, quat_from_rpy
+from tasklib.pose import DOWN, UP, Pose, pose, quat_from_rpy
 from tasklib.steps import (
     Actuate,
     Approach,
@@ -61,7 +63,9 @@ from tasklib.tdl import (
 )
 
 __all__ = [
+    "DOWN",
     "EXAMPLES",
+    "UP",
     "Actuate",
     "Approach",
     "ArrivalModel",
@@ -100,6 +104,7 @@ __all__ = [
     "load_taskset",
     "load_tdl",
     "parse_tdl",
+    "pose",
     "print_tdl",
     "quat_from_rpy",
     "save_taskset",

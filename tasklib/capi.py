@@ -86,20 +86,31 @@ __all__ = [
 ]
 
 PoseLike: TypeAlias = Pose | Sequence[float]
-"""A Pose, ``(x, y, z)`` or ``(x, y, z, qw, qx, qy, qz)``."""
+"""A Pose, ``(x, y, z)`` (tool pointing down) or ``(x, y, z, qw, qx, qy, qz)``."""
 
 
 def as_pose(value: PoseLike) -> Pose:
-    """A Pose from a Pose, a 3-sequence (position) or a 7-sequence (position + quaternion)."""
+    """A Pose from a Pose, a 3-sequence or a 7-sequence.
+
+    ``(x, y, z)`` means the tool points down at that position (orientation
+    :data:`tasklib.DOWN`, the one every arm kind reaches);
+    ``(x, y, z, qw, qx, qy, qz)`` gives the orientation as a unit
+    quaternion; :func:`tasklib.pose` builds other orientations by name.
+    """
     if isinstance(value, Pose):
         return value
+    if isinstance(value, str | bytes) or not hasattr(value, "__iter__"):
+        raise ValidationError(
+            f"a pose is a Pose or 3 (x, y, z) or 7 (x, y, z, qw, qx, qy, qz) numbers, got {value!r}"
+        )
     vals = tuple(value)
     if len(vals) == 3:
         return Pose((vals[0], vals[1], vals[2]))
     if len(vals) == 7:
         return Pose((vals[0], vals[1], vals[2]), (vals[3], vals[4], vals[5], vals[6]))
     raise ValidationError(
-        f"a pose is 3 (position) or 7 (position + quaternion) numbers, got {len(vals)}"
+        f"a pose is 3 (x, y, z: tool pointing down) or 7 (x, y, z, qw, qx, qy, qz) numbers, "
+        f"got {len(vals)}"
     )
 
 

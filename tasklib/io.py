@@ -1,8 +1,8 @@
 """Task sets to and from plain data, JSON and TOML files.
 
-The file layout mirrors the records (see ``docs/tasklib.md``)::
+A task-set file is short enough to write by hand (``docs/tasklib.md``
+documents every field)::
 
-    format = "multiarm.taskset/1"
     name = "demo"
     tdl = '''trajectory t { taught { stop (0, 0, 0.3) } }'''
 
@@ -20,13 +20,19 @@ The file layout mirrors the records (see ``docs/tasklib.md``)::
     consumes = ["pin"]
     steps = [
         { kind = "move", trajectory = "t" },
+        { kind = "approach", target = [0.1, 0.5, 0.05] },
         { kind = "grasp", part = "pin" },
     ]
 
-Numbers are written so that they read back exactly:
+A pose is ``[x, y, z]`` (metres; the tool points down) or ``[x, y, z, qw,
+qx, qy, qz]`` (with a unit quaternion); the older table form ``{ position =
+[...], orientation = [...] }`` still reads. Keys left out take their
+defaults. :func:`save_taskset` writes the same compact layout (one line a
+step, defaults left out), and numbers so that they read back exactly:
 ``load_taskset(save_taskset(ts, path)) == ts`` for both formats. Unknown
-keys, missing keys and wrong types are errors that name the place
-(``tasks[3].steps[1]``) and the file.
+keys, missing keys and wrong types are errors that name the file and the
+place (``tasks[3].steps[1].target``); TOML syntax errors give
+``file:line:col``.
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 import tomllib
 import types
 import typing
@@ -43,16 +50,23 @@ from os import PathLike, fspath
 from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin
 
-import tomli_w
-
 from multiarm.errors import FormatError, SourceError, ValidationError
 from tasklib.arrivals import ARRIVAL_MODELS, Feeder
 from tasklib.model import Part, PartGroup, Task, TaskSet
-from tasklib.pose import Pose
+from tasklib.pose import DOWN, Pose
 from tasklib.steps import STEP_KINDS
 from tasklib.tdl import TDLDocument, parse_tdl, print_tdl
 
-__all__ = ["FORMAT", "load_taskset", "save_taskset", "taskset_from_dict", "taskset_to_dict"]
+__all__ = [
+    "FORMAT",
+    "load_taskset",
+    "parse_toml",
+    "read_toml_source",
+    "save_taskset",
+    "taskset_from_dict",
+    "taskset_to_dict",
+    "taskset_to_toml",
+]
 
 FORMAT = "multiarm.taskset/1"
 
@@ -67,9 +81,20 @@ class _Bad(Exception):
 # ------------------------------------------------------------------- to data
 
 
+def _same(value: Any, default: Any) -> bool:
+    """``value`` is the default, to the bit (so that leaving it out round-trips)."""
+    return type(value) is type(default) and repr(value) == repr(default)
+
+
+def _is_down(q: tuple[float, ...]) -> bool:
+    return repr(tuple(q)) == repr(DOWN)
+
+
 def _plain(obj: Any) -> Any:
     if isinstance(obj, Pose):
-        return {"position": list(obj.position), "orientation": list(obj.orientation)}
+        if _is_down(obj.orientation):
+            return list(obj.position)
+        return [*obj.position, *obj.orientation]
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         out: dict[str, Any] = {}
         kind = getattr(type(obj), "kind", None)
@@ -83,6 +108,10 @@ def _plain(obj: Any) -> Any:
                 continue
             value = getattr(obj, f.name)
             if value is None:
+                continue
+            if f.default is not dataclasses.MISSING and _same(value, f.default):
+                continue
+            if f.default_factory is not dataclasses.MISSING and _same(value, f.default_factory()):
                 continue
             out[f.name] = _plain(value)
         return out
@@ -169,6 +198,8 @@ def _convert(tp: Any, value: Any, where: str) -> Any:
             raise _Bad(where, f"expected text, got {value!r}")
         return value
     if tp is Pose:
+        if isinstance(value, list | tuple):
+            return _pose_list(value, where)
         return _record(Pose, value, where)
     if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         return _record(tp, value, where)
@@ -198,6 +229,22 @@ def _record(cls: type, value: Any, where: str, ignore: tuple[str, ...] = ()) -> 
         kwargs[name] = _convert(hints[name], value[name], sub)
     try:
         return cls(**kwargs)
+    except ValidationError as exc:
+        raise _Bad(where, str(exc)) from None
+
+
+def _pose_list(value: list[Any] | tuple[Any, ...], where: str) -> Pose:
+    numbers = all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
+    if not numbers or len(value) not in (3, 7):
+        raise _Bad(
+            where,
+            "a pose is [x, y, z] (metres, tool pointing down) or [x, y, z, qw, qx, qy, qz], "
+            f"got {value!r}",
+        )
+    try:
+        if len(value) == 3:
+            return Pose((value[0], value[1], value[2]))
+        return Pose((value[0], value[1], value[2]), (value[3], value[4], value[5], value[6]))
     except ValidationError as exc:
         raise _Bad(where, str(exc)) from None
 
@@ -285,14 +332,160 @@ def _format_of(path: Path) -> str:
     )
 
 
-def save_taskset(ts: TaskSet, path: str | PathLike[str]) -> Path:
-    """Write a task set to ``path`` (``.toml`` or ``.json``); returns the path."""
-    p = Path(path)
+# ---------------------------------------------------------------- TOML text
+
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+_ESCAPES = {
+    '"': '\\"',
+    "\\": "\\\\",
+    "\b": "\\b",
+    "\t": "\\t",
+    "\n": "\\n",
+    "\f": "\\f",
+    "\r": "\\r",
+}
+
+
+def _toml_str(text: str) -> str:
+    out = []
+    for ch in text:
+        if ch in _ESCAPES:
+            out.append(_ESCAPES[ch])
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_key(key: str) -> str:
+    return key if _BARE_KEY.fullmatch(key) else _toml_str(key)
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValidationError(f"cannot write the non-finite number {value!r}")
+        return repr(value)
+    if isinstance(value, str):
+        return _toml_str(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, Mapping):
+        if not value:
+            return "{}"
+        items = ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items())
+        return "{ " + items + " }"
+    raise ValidationError(
+        f"cannot write a value of type {type(value).__name__}"
+    )  # pragma: no cover
+
+
+def _toml_text_block(text: str) -> str:
+    """A multi-line literal string when the text allows it (TDL reads best so)."""
+    plain = all(ch in "\n\t" or (ord(ch) >= 0x20 and ord(ch) != 0x7F) for ch in text)
+    if plain and "'''" not in text and not text.endswith("'"):
+        return "'''\n" + text + "'''"
+    return _toml_str(text)
+
+
+def taskset_to_toml(ts: TaskSet) -> str:
+    """The task set as the short TOML text :func:`save_taskset` writes.
+
+    One ``[[tasks]]`` table a task, one line a step, poses as ``[x, y, z]``
+    when the tool points down, defaults left out; reads back exactly with
+    :func:`taskset_from_dict` (``tomllib.loads``).
+    """
     data = taskset_to_dict(ts)
+    lines: list[str] = []
+    for key in ("format", "name", "description"):
+        if key in data:
+            lines.append(f"{key} = {_toml_value(data[key])}")
+    if "tdl" in data:
+        lines.append(f"tdl = {_toml_text_block(data['tdl'])}")
+    for key in ("feeders", "parts", "groups", "tasks"):
+        for item in data.get(key, []):
+            lines += ["", f"[[{key}]]"]
+            for k, v in item.items():
+                if k == "steps":
+                    lines.append("steps = [")
+                    lines += [f"    {_toml_value(step)}," for step in v]
+                    lines.append("]")
+                else:
+                    lines.append(f"{_toml_key(k)} = {_toml_value(v)}")
+    return "\n".join(lines) + "\n"
+
+
+_TOML_POS = re.compile(r"\s*\(at line (\d+), column (\d+)\)")
+
+
+def read_toml_source(path: str | PathLike[str], what: str) -> str:
+    """The UTF-8 text of a TOML file; a :class:`FormatError` naming the file otherwise.
+
+    Undecodable bytes are located (``file:line:col``, the column counted in
+    bytes) and an empty file is an error at ``file:1:1``.
+    """
+    name = fspath(path)
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as exc:
+        raise FormatError(f"cannot read {what} file: {exc.strerror}", filename=name) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise FormatError(
+            f"{what} file is not UTF-8 text (byte 0x{raw[exc.start]:02x}: {exc.reason}); "
+            "save it as UTF-8",
+            filename=name,
+            line=line,
+            column=col,
+        ) from None
+    if not text.strip():
+        raise FormatError(f"the {what} file is empty", filename=name, line=1, column=1)
+    return text
+
+
+def parse_toml(text: str, filename: str) -> dict[str, Any]:
+    """Parse TOML text; a syntax error is a :class:`FormatError` at ``file:line:col``.
+
+    Shared by every TOML file of the package (task sets, cells).
+    """
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        msg = str(exc)
+        m = _TOML_POS.search(msg)
+        line = int(m.group(1)) if m else None
+        col = int(m.group(2)) if m else None
+        if m is None and "end of document" in msg:
+            lines = text.split("\n")
+            line, col = len(lines), len(lines[-1]) + 1
+            msg = msg.replace("(at end of document)", "at the end of the file")
+        raise FormatError(
+            f"TOML syntax error: {_TOML_POS.sub('', msg).strip()}",
+            filename=filename,
+            line=line,
+            column=col,
+        ) from None
+
+
+def save_taskset(ts: TaskSet, path: str | PathLike[str]) -> Path:
+    """Write a task set to ``path`` (``.toml`` or ``.json``); returns the path.
+
+    TOML is the short, hand-editable layout of :func:`taskset_to_toml`.
+    """
+    p = Path(path)
     if _format_of(p) == "json":
+        data = taskset_to_dict(ts)
         p.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
     else:
-        p.write_text(tomli_w.dumps(data, multiline_strings=True), encoding="utf-8")
+        p.write_text(taskset_to_toml(ts), encoding="utf-8")
     return p
 
 
@@ -310,20 +503,14 @@ def load_taskset(path: str | PathLike[str]) -> TaskSet:
     p = Path(path)
     name = fspath(path)
     kind = _format_of(p)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise FormatError(f"cannot read task-set file: {exc.strerror}", filename=name) from None
-    except UnicodeDecodeError as exc:
-        raise FormatError(
-            f"task-set file is not UTF-8 text ({exc.reason})", filename=name
-        ) from None
-    try:
-        data = json.loads(text) if kind == "json" else tomllib.loads(text)
-    except json.JSONDecodeError as exc:
-        raise FormatError(exc.msg, filename=name, line=exc.lineno, column=exc.colno) from None
-    except tomllib.TOMLDecodeError as exc:
-        raise FormatError(f"TOML syntax error: {exc}", filename=name) from None
+    text = read_toml_source(p, "task-set")
+    if kind == "toml":
+        data: Any = parse_toml(text, name)
+    else:
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise FormatError(exc.msg, filename=name, line=exc.lineno, column=exc.colno) from None
     try:
         return taskset_from_dict(data, filename=name)
     except SourceError:

@@ -10,9 +10,18 @@ import numpy as np
 from multiarm.errors import ValidationError
 from multiarm.types import FloatArray, Point3, Quaternion, Transform, check_finite
 
-__all__ = ["IDENTITY", "Pose", "quat_from_rpy", "quat_to_matrix"]
+__all__ = ["DOWN", "IDENTITY", "UP", "Pose", "pose", "quat_from_rpy", "quat_to_matrix"]
 
 IDENTITY: Quaternion = (1.0, 0.0, 0.0, 0.0)
+"""The identity quaternion ``(w, x, y, z)``: the tool axis (z) points *up*."""
+
+DOWN: Quaternion = (0.0, 1.0, 0.0, 0.0)
+"""Tool pointing down: a half turn about x. The one orientation every arm kind
+reaches (gantries and SCARAs keep their tool vertical, pointing down), and the
+default of :class:`Pose`."""
+
+UP: Quaternion = IDENTITY
+"""Tool pointing up (the identity): only a 6-DOF serial arm may reach it."""
 
 _UNIT_TOL = 1e-6
 
@@ -86,18 +95,20 @@ class Pose:
     ----------
     position : (3,) float, metres
     orientation : (4,) float
-        Unit quaternion ``(w, x, y, z)``; identity by default. Stored as
-        given (not re-normalised) so that files round-trip bit for bit; it
-        must be of unit norm within 1e-6.
+        Unit quaternion ``(w, x, y, z)``; :data:`DOWN` (tool pointing down,
+        reachable by every arm kind) by default. Stored as given (not
+        re-normalised) so that files round-trip bit for bit; it must be of
+        unit norm within 1e-6.
 
     Examples
     --------
-    >>> Pose((0.5, 0.2, 0.1)).matrix()[:3, 3].tolist()
-    [0.5, 0.2, 0.1]
+    >>> p = Pose((0.5, 0.2, 0.1))
+    >>> p.matrix()[:3, 3].tolist(), p.orientation == DOWN
+    ([0.5, 0.2, 0.1], True)
     """
 
     position: Point3
-    orientation: Quaternion = IDENTITY
+    orientation: Quaternion = DOWN
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "position", _as_point(self.position, "pose position"))
@@ -113,3 +124,58 @@ class Pose:
     def as_array(self) -> FloatArray:
         """(7,) float: ``x, y, z, qw, qx, qy, qz``."""
         return np.array([*self.position, *self.orientation])
+
+
+_TOOL = {"down": DOWN, "up": UP}
+
+
+def pose(x: float, y: float, z: float, tool: str | Quaternion = "down", yaw: float = 0.0) -> Pose:
+    """A tool pose at ``(x, y, z)`` metres in the cell frame.
+
+    Parameters
+    ----------
+    x, y, z : float
+        Position of the tool point, metres.
+    tool : {"down", "up"} or (4,) float
+        Where the tool points: ``"down"`` (the default, and what a bare
+        ``(x, y, z)`` means wherever a pose is accepted; every arm kind
+        reaches it), ``"up"``, or a unit quaternion ``(w, x, y, z)``.
+    yaw : float
+        Rotation of the tool about the vertical axis of the cell, radians,
+        applied after ``tool`` (a SCARA or a gantry wrist turns the part by
+        it).
+
+    Returns
+    -------
+    Pose
+
+    Raises
+    ------
+    ValidationError
+        For an unknown ``tool`` name, a non-unit quaternion or a non-finite
+        number.
+
+    Examples
+    --------
+    >>> pose(0.5, 0.2, 0.1) == Pose((0.5, 0.2, 0.1), DOWN)
+    True
+    >>> [round(c, 12) for c in pose(0.5, 0.2, 0.1, yaw=math.pi).orientation]
+    [0.0, 0.0, 1.0, 0.0]
+    """
+    if isinstance(tool, str):
+        if tool not in _TOOL:
+            raise ValidationError(
+                f"pose tool must be 'down', 'up' or a quaternion (w, x, y, z), got {tool!r}"
+            )
+        q = _TOOL[tool]
+    else:
+        q = _as_quat(tool, "pose tool")
+    yaw_f = float(yaw)
+    if not math.isfinite(yaw_f):
+        raise ValidationError(f"pose yaw must be a finite angle in radians, got {yaw!r}")
+    if yaw_f != 0.0:
+        c, s = math.cos(yaw_f / 2), math.sin(yaw_f / 2)
+        w, qx, qy, qz = q
+        # Rz(yaw) * q (Hamilton product): turn about the cell's vertical axis.
+        q = (c * w - s * qz, c * qx - s * qy, c * qy + s * qx, c * qz + s * w)
+    return Pose((x, y, z), q)

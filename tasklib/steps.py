@@ -58,12 +58,22 @@ __all__ = [
 ]
 
 
+LARGEST = 1e6
+"""Largest duration (s), distance (m), force (N) or count a step accepts."""
+MAX_TRIES = 100_000
+"""Most insertion tries of one force search (each is an offset the search visits)."""
+SMALLEST_FRACTION = 1e-6
+"""Smallest speed fraction: slower moves would last beyond any plan."""
+
+
 def _positive(value: float, what: str, *, allow_zero: bool = False) -> float:
     v = float(value)
     ok = math.isfinite(v) and (v >= 0.0 if allow_zero else v > 0.0)
     if not ok:
         bound = ">= 0" if allow_zero else "> 0"
         raise ValidationError(f"{what} must be finite and {bound}, got {value!r}")
+    if v > LARGEST:
+        raise ValidationError(f"{what} must be at most {LARGEST:g}, got {value!r}")
     return v
 
 
@@ -71,6 +81,10 @@ def _fraction(value: float, what: str) -> float:
     v = float(value)
     if not (math.isfinite(v) and 0.0 < v <= 1.0):
         raise ValidationError(f"{what} must be a fraction in (0, 1], got {value!r}")
+    if v < SMALLEST_FRACTION:
+        raise ValidationError(
+            f"{what} must be at least {SMALLEST_FRACTION:g} of the top speed, got {value!r}"
+        )
     return v
 
 
@@ -217,8 +231,10 @@ class ForceSearch:
     def __post_init__(self) -> None:
         if isinstance(self.max_tries, bool) or not isinstance(self.max_tries, int | np.integer):
             raise ValidationError(f"force search max_tries must be an int, got {self.max_tries!r}")
-        if self.max_tries < 1:
-            raise ValidationError(f"force search needs max_tries >= 1, got {self.max_tries}")
+        if not 1 <= self.max_tries <= MAX_TRIES:
+            raise ValidationError(
+                f"force search needs max_tries in [1, {MAX_TRIES}], got {self.max_tries}"
+            )
         object.__setattr__(self, "max_tries", int(self.max_tries))
         object.__setattr__(self, "step", _positive(self.step, "force search step"))
         if self.pattern not in ("spiral", "grid"):

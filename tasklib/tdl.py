@@ -92,6 +92,10 @@ def _check_speed(speed: float | None, what: str) -> float | None:
     s = float(speed)
     if not (math.isfinite(s) and 0.0 < s <= 1.0):
         raise ValidationError(f"{what} speed must be a fraction in (0, 1], got {speed!r}")
+    if s < 1e-6:
+        raise ValidationError(
+            f"{what} speed must be at least 1e-06 of the top speed, got {speed!r}"
+        )
     return s
 
 

@@ -15,7 +15,7 @@ names = st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,10}", fullmatch=True).filter(
 coords = st.floats(allow_nan=False, allow_infinity=False, width=64)
 small_coords = st.floats(-10.0, 10.0, allow_nan=False)
 angles = st.floats(-2 * math.pi, 2 * math.pi, allow_nan=False)
-fractions = st.floats(0.0, 1.0, exclude_min=True, allow_nan=False)
+fractions = st.floats(1e-6, 1.0, allow_nan=False)  # speeds: at least 1e-6 of the top speed
 
 
 @st.composite

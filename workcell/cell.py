@@ -44,7 +44,6 @@ Examples
 from __future__ import annotations
 
 import math
-import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -55,12 +54,11 @@ from typing import Any, Literal
 
 import numpy as np
 
-from multiarm.errors import FormatError, MultiarmError, ValidationError
-from multiarm.text import read_source
+from multiarm.errors import MultiarmError, ValidationError
 from multiarm.types import JointVector
 from tasklib import TaskSet
 from tasklib.examples import EXAMPLES as TASK_EXAMPLES
-from tasklib.io import load_taskset
+from tasklib.io import load_taskset, parse_toml, read_toml_source
 from tasklib.tdl import load_tdl
 from workcell.arms import DriveArm, arm_from_dict
 from zones import ZoneMap, load_sdl
@@ -136,6 +134,12 @@ class Cell:
         if not self.arms:
             raise ValidationError(f"cell {self.name!r} has no arm")
         names = [a.name for a in self.arms]
+        for n in names:
+            if not isinstance(n, str) or not n.strip() or "|" in n or "/" in n:
+                raise ValidationError(
+                    f"cell {self.name!r}: an arm's name must be non-empty text without '|' or "
+                    f"'/', got {n!r}"
+                )
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise ValidationError(f"cell {self.name!r} has two arms named {dup[0]!r}")
@@ -209,7 +213,6 @@ class Cell:
 
 _TOP_KEYS = {"name", "description", "zones", "tasks", "tdl", "compile", "arms"}
 _COMPILE_KEYS = {"plan_with", "releases", "seed", "padding", "park", "separate_arms"}
-_TOML_POS = re.compile(r"\(at line (\d+), column (\d+)\)")
 
 
 def _fail(where: str, message: str) -> ValidationError:
@@ -404,24 +407,8 @@ def load_cell(path: str | PathLike[str]) -> Cell:
     """
     p = Path(path)
     name = fspath(path)
-    text = read_source(path, FormatError, "cell")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        msg = str(exc)
-        m = _TOML_POS.search(msg)
-        line = int(m.group(1)) if m else None
-        col = int(m.group(2)) if m else None
-        if m is None and "end of document" in msg:
-            lines = text.split("\n")
-            line, col = len(lines), len(lines[-1]) + 1
-            msg = msg.replace("(at end of document)", "at the end of the file")
-        raise FormatError(
-            f"TOML syntax error: {_TOML_POS.sub('', msg).strip()}",
-            filename=name,
-            line=line,
-            column=col,
-        ) from None
+    text = read_toml_source(path, "cell")
+    data = parse_toml(text, name)
     return cell_from_dict(data, filename=name, base_dir=p.parent)
 
 

@@ -17,11 +17,14 @@ Sub-commands:
     (``--network``); print planned vs executed; write plots, ``trace.json``,
     ``metrics.json`` and ``tasks.csv`` to ``--out``.
 ``check FILE...``
-    Parse and validate files: problem JSON, schedules (validated against
-    ``--problem``) and FJSPLIB instances are recognised by content; then by
-    extension ``.tdl`` (trajectories), ``.sdl`` (zones), ``.toml`` / ``.json``
-    (task sets; a ``.toml`` with ``[arms]`` tables is a cell file, checked by
-    compiling it).
+    Parse and validate files (:mod:`workcell.check`): problem JSON,
+    schedules (validated against ``--problem``) and FJSPLIB instances are
+    recognised by content; then by extension ``.tdl`` (trajectories),
+    ``.sdl`` (zones), ``.json`` and ``.toml`` (a task set when it holds a
+    ``tasks`` list, else a cell file, compiled and explained: per arm the
+    tasks it can do and why not the others, zones and tools with their users,
+    warnings); a built-in cell's name is explained too. ``--json`` prints one
+    machine-readable report.
 ``schedule PROBLEM``
     Solve a scheduling problem (``.json`` written by ``save_problem``, an
     FJSPLIB file, a cell file, or a built-in cell's name) and print the
@@ -265,89 +268,11 @@ def _demo_cell(cell: Any, args: argparse.Namespace, out: Path) -> tuple[dict[str
     }, not stopped
 
 
-def _is_cell(path: Path) -> bool:
-    """A TOML file with an ``[arms...]`` table is a cell file (else a task set)."""
-    import tomllib
-
-    try:
-        return "arms" in tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        return False
-
-
-def _check_scheduling(path: Path, kind: str, problem_name: str | None) -> str:
-    """Check a problem JSON, a schedule or an FJSP file (recognised by content)."""
-    from scheduler import load_problem, load_schedule, lower_bound, read_fjsp, validate
-
-    if kind == "fjsp":
-        p = read_fjsp(path)
-        return f"FJSP instance: {p.n_arms} machines, {p.n_tasks} operations, {p.n_modes} modes"
-    if kind == "problem":
-        p = load_problem(path)
-        return (
-            f"problem {p.name!r}: {p.n_arms} arms, {p.n_tasks} tasks, {p.n_modes} modes, "
-            f"{p.n_zones} zones, lower bound {lower_bound(p):.6g}"
-        )
-    if problem_name is None:
-        raise UsageError(
-            f"{path}: a schedule is checked against its problem: add --problem PROBLEM"
-        )
-    problem = _load_schedulable(problem_name)
-    s = load_schedule(path, problem)
-    return f"schedule of {s.n_tasks} tasks, valid, makespan {validate(problem, s):.6g}"
-
-
-def _check_one(path: Path, problem_name: str | None = None) -> str:
-    from scheduler import detect_format
-
-    kind = detect_format(path) if path.is_file() else None
-    if kind is not None:
-        return _check_scheduling(path, kind, problem_name)
-    suffix = path.suffix.lower()
-    if suffix == ".fjs":
-        return _check_scheduling(path, "fjsp", problem_name)  # malformed: its error
-    if suffix == ".toml" and _is_cell(path):
-        from workcell import compile_cell, load_cell
-
-        cell = load_cell(path)
-        p = compile_cell(cell)
-        return (
-            f"cell {cell.name!r}: {len(cell.arms)} arms, {p.n_tasks} tasks, {p.n_modes} modes, "
-            f"{p.n_zones} zones"
-        )
-    if suffix == ".tdl":
-        from tasklib import load_tdl
-
-        doc = load_tdl(path)
-        return f"{len(doc.trajectories)} trajectories, {len(doc.frames)} frames"
-    if suffix in (".toml", ".json"):
-        from tasklib import load_taskset
-
-        ts = load_taskset(path)
-        s = ts.summary()
-        return f"task set {s['name']!r}: {s['tasks']} tasks, {s['parts']} parts, depth {s['depth']}"
-    if suffix == ".sdl":
-        from zones import load_sdl
-
-        s = load_sdl(path).summary()
-        return (
-            f"{s['zones']} zones ({s['exclusive']} exclusive, {s['shared']} shared), "
-            f"{s['walls']} walls, {s['tools']} tools, {s['phases']} phases"
-        )
-    raise MultiarmError(f"{path}: unknown file type {suffix!r} (known: .tdl, .sdl, .toml, .json)")
-
-
 def cmd_check(args: argparse.Namespace) -> int:
-    """Validate each file; print one line per file."""
-    status = 0
-    for name in args.files:
-        path = Path(name)
-        try:
-            print(f"{path}: ok ({_check_one(path, args.problem)})")
-        except MultiarmError as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            status = 1
-    return status
+    """Validate each file and explain cells (:mod:`workcell.check`)."""
+    from workcell.check import check_files
+
+    return check_files(args.files, args.problem, as_json=args.json)
 
 
 def _load_schedulable(name: str) -> Any:
@@ -882,11 +807,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_simulate)
     p = sub.add_parser(
-        "check", help="parse and validate .tdl/.sdl files, task sets and cell files (.toml/.json)"
+        "check",
+        help="validate .tdl/.sdl/task-set/problem/schedule files; explain cell files (.toml)",
     )
     p.add_argument("files", nargs="+", metavar="FILE")
     p.add_argument(
         "--problem", metavar="PROBLEM", help="the problem that schedule files are validated against"
+    )
+    p.add_argument(
+        "--json", action="store_true", help="print one JSON report of every file (for scripts)"
     )
     p.set_defaults(func=cmd_check)
     p = sub.add_parser(

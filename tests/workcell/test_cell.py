@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from multiarm.errors import FormatError, NoFeasibleSchedule, ValidationError
 from scheduler import solve, validate
@@ -277,3 +279,184 @@ def test_oracle_detours_are_collision_free_and_cost_their_extra_time() -> None:
     before = o.stats.queries - o.stats.cached
     assert o.cost(m, b, pose) == c
     assert o.stats.queries - o.stats.cached == before
+
+
+# ------------------------------------------------------------------ poses
+
+
+def test_the_readme_c_style_example_compiles_in_a_cell_of_gantries_and_scaras() -> None:
+    """A bare (x, y, z) points the tool down, the pose gantries and SCARAs reach (issue 18)."""
+    import re
+
+    from tasklib import TaskSet
+    from workcell import Cell
+    from workcell.arms import arm_from_dict
+    from zones import parse_sdl
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    block = next(b for b in re.findall(r"```python\n(.*?)```", readme, flags=re.S) if "capi" in b)
+    assert "(0.5, 0.5, 0.1)" in block  # a bare 3-tuple pose
+    namespace: dict[str, object] = {}
+    exec(compile(block, "README.md", "exec"), namespace)
+    taskset = namespace["taskset"]
+    assert isinstance(taskset, TaskSet)
+    zone_map = parse_sdl("cell (-1, -1, 0) (2, 2, 1.5)\n", "empty.sdl")
+    rails = {"x": [0.0, 1.0], "y": [0.0, 1.0], "z": [0.0, 0.4]}
+    caps = ["gripper", "force_sensor"]
+    gantry = arm_from_dict("g", {"type": "gantry", "rails": rails, "capabilities": caps}, "g")
+    base = [0.9, 0.5, 0.0, math.pi]
+    scara = arm_from_dict("s", {"type": "scara", "base": base, "capabilities": caps}, "s")
+    for arms in ((gantry,), (scara,)):
+        cell = Cell("readme", taskset, zone_map, arms, separate_arms=False)
+        cc = compile_cell_detailed(cell)
+        assert {cc.problem.arm_names[int(a)] for a in cc.problem.mode_arm} == {
+            a.name for a in arms
+        }, cc.rejected
+
+
+# ------------------------------------------------- physical ranges of arm keys
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (
+            "link_lengths = [1e300, 0.3]\n",
+            r"cell\.toml: arms\.a\.link_lengths: 1e\+300 is out of range: .* \[1e-06, 100\] m",
+        ),
+        ("max_velocity = [1e-300, 4, 1, 6]\n", r"arms\.a\.max_velocity: 1e-300 is out of range"),
+        ("max_acceleration = [10, 1e9, 5, 30]\n", r"arms\.a\.max_acceleration: 1e\+09 is out"),
+        ("payload = 1e300\n", r"arms\.a\.payload: 1e\+300 is out of range: .* kg"),
+        ("radius = 1e-300\n", r"arms\.a\.radius: 1e-300 is out of range"),
+        ("z_range = [0, 1e300]\n", r"arms\.a\.z_range: 1e\+300 is out of range"),
+        ("joint_limits = [[-1e300, 1], [-1, 1], [0, 0.3], [-1, 1]]\n", r"arms\.a\.joint_limits"),
+    ],
+)
+def test_numbers_outside_their_physical_range_are_refused_by_field(
+    tmp_path: Path, extra: str, message: str
+) -> None:
+    body = GOOD.replace("base = [-0.5, -0.5, 0.0, 0.785]", "base = [1e300, 0, 0, 0]")
+    with pytest.raises(ValidationError, match=r"arms\.a\.base: 1e\+300 is out of range"):
+        load_cell(_cell_file(tmp_path, body))
+    with pytest.raises(ValidationError, match=message):
+        load_cell(_cell_file(tmp_path, GOOD + extra))
+
+
+GANTRY = """
+name = "g"
+zones = "builtin:supersigma"
+tasks = "builtin:supersigma"
+[arms.a]
+type = "gantry"
+rails = { x = [0.0, 1.0], y = [0.0, 1.0], z = [0.0, 0.5] }
+[arms.a.stepper]
+"""
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        ("step_length = 1e-300\n", r"arms\.a\.stepper\.step_length: 1e-300 is out of range"),
+        ("max_rate = 1e300\n", r"arms\.a\.stepper\.max_rate: 1e\+300 is out of range"),
+        ("curves = { light = 1e-300 }\n", r"arms\.a\.stepper\.curves\.light: 1e-300 is out"),
+        (
+            "step_length = 1e-9\nmax_rate = 10\nlow_rate = 1\n",
+            r"arms\.a\.stepper: top speed max_rate x step_length = 1e-08 m/s is out of range",
+        ),
+        ("short_steps = 10000000000\n", r"arms\.a\.stepper\.short_steps: 1e\+10 is out"),
+    ],
+)
+def test_stepper_numbers_outside_their_range_are_refused(
+    tmp_path: Path, extra: str, message: str
+) -> None:
+    with pytest.raises(ValidationError, match=message):
+        load_cell(_cell_file(tmp_path, GANTRY + extra))
+
+
+def test_empty_capabilities_stay_empty_and_a_nameless_arm_is_refused(tmp_path: Path) -> None:
+    cell = load_cell(_cell_file(tmp_path, GOOD + "capabilities = []\n"))
+    assert cell.arms[0].capabilities == frozenset()
+    assert load_cell(_cell_file(tmp_path, GOOD)).arms[0].capabilities == {"gripper"}
+    with pytest.raises(ValidationError, match=r"cell\.toml: arms\.: an arm's name must be"):
+        load_cell(_cell_file(tmp_path, GOOD.replace("[arms.a]", '[arms.""]')))
+    with pytest.raises(ValidationError, match=r"arms\.a\|b: an arm's name must be"):
+        load_cell(_cell_file(tmp_path, GOOD.replace("[arms.a]", '[arms."a|b"]')))
+
+
+_EXTREMES = st.one_of(
+    st.sampled_from([1e-300, 1e-12, 1e-7, 1e-6, 1.0, 99.0, 1e6, 1e7, 1e300, -1e300, -1.0, 0.0]),
+    st.floats(-1e8, 1e8, allow_nan=False),
+)
+# (section, key) -> how many numbers (0: one number)
+_NUMERIC_FIELDS = {
+    ("scara", "max_velocity"): 4,
+    ("scara", "max_acceleration"): 4,
+    ("scara", "max_jerk"): 4,
+    ("scara", "link_lengths"): 2,
+    ("scara", "z_range"): 2,
+    ("scara", "payload"): 0,
+    ("scara", "radius"): 0,
+    ("scara", "arm_height"): 0,
+    ("scara", "base"): 4,
+    ("gantry", "height"): 0,
+    ("gantry", "hand"): 3,
+    ("gantry", "yaw_limits"): 2,
+    ("gantry.stepper", "step_length"): 0,
+    ("gantry.stepper", "max_rate"): 0,
+    ("gantry.stepper", "low_rate"): 0,
+    ("gantry.stepper", "stop_accel"): 0,
+    ("serial", "max_velocity"): 6,
+    ("serial", "max_acceleration"): 6,
+    ("serial", "max_jerk"): 6,
+    ("serial", "radius"): 0,
+}
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.sampled_from(sorted(_NUMERIC_FIELDS)), st.lists(_EXTREMES, min_size=6, max_size=6))
+def test_arm_numbers_are_refused_by_field_or_give_finite_timings(
+    field: tuple[str, str], values: list[float]
+) -> None:
+    """Hypothesis over the cell file's numeric arm fields, extremes included: either a
+    ValidationError naming the field, or an arm whose move times are finite (no
+    overflow later)."""
+    from workcell.arms import arm_from_dict
+
+    section, key = field
+    n = _NUMERIC_FIELDS[field]
+    value: object = values[0] if n == 0 else values[:n]
+    data: dict[str, object] = {"type": section.split(".")[0]}
+    if data["type"] == "gantry":
+        data["rails"] = {"x": [0.0, 1.0], "y": [0.0, 1.0], "z": [0.0, 0.5]}
+    if data["type"] == "serial":
+        data["example"] = "6dof"
+    if section == "gantry.stepper":
+        data["stepper"] = {key: value}
+        path = "c.toml: arms.a.stepper"
+    else:
+        data[key] = value
+        path = f"c.toml: arms.a.{key}"
+    try:
+        arm = arm_from_dict("a", data, "c.toml: arms.a")
+    except ValidationError as exc:
+        text = str(exc)
+        assert text.startswith(path) or text.startswith("c.toml: arms.a: "), text
+        return
+    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
+    for q1 in (hi, lo + (hi - lo) * 1e-3):
+        t = arm.move_time(lo, q1)
+        assert math.isfinite(t) and 0.0 <= t < 1e9
+
+
+def test_the_6dof_example_takes_its_keys_instead_of_failing_or_ignoring_them() -> None:
+    from workcell.arms import arm_from_dict
+
+    base = {"type": "serial", "example": "6dof"}
+    arm = arm_from_dict("r", {**base, "joint_limits": [[-3.0, 3.0]] * 6}, "c.toml: arms.r")
+    assert arm.joint_limits.tolist() == [[-3.0, 3.0]] * 6  # was a TypeError
+    arm = arm_from_dict("r", {**base, "radius": 0.2}, "c.toml: arms.r")
+    assert arm.shapes[-1].size == (0.2,)  # was silently ignored
+    with pytest.raises(ValidationError, match=r"c\.toml: arms\.r\.kinds: the 6dof example"):
+        arm_from_dict("r", {**base, "kinds": ["revolute"] * 6}, "c.toml: arms.r")
+    with pytest.raises(ValidationError, match=r"c\.toml: arms\.r: serial arm 'r': home"):
+        arm_from_dict("r", {**base, "joint_limits": [[-0.1, 0.1]] * 6}, "c.toml: arms.r")

@@ -205,8 +205,9 @@ class SerialArm(DriveArm):
             "home": (0.0, 0.3, 0.9, 0.0, 1.2, 0.0),
             "capabilities": ("gripper",),
         }
+        defaults["joint_limits"] = lim
         defaults.update(kw)
-        return cls(name, dh=dh, joint_limits=lim, base=base, **defaults)  # type: ignore[arg-type]
+        return cls(name, dh=dh, base=base, **defaults)  # type: ignore[arg-type]
 
     # ------------------------------------------------------- kinematics
     def _joint_transforms(self, q: FloatArray) -> FloatArray:

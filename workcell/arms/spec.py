@@ -1,44 +1,19 @@
 """Arms from plain data: the ``[arms.NAME]`` tables of a cell file.
 
-Keys common to every arm::
+:data:`ARM_KEYS` lists every key of every arm kind with its unit, default,
+allowed range and meaning; :func:`arm_keys_markdown` prints it as the
+reference tables of ``docs/workcell.md`` (a test keeps the two equal), and
+:func:`arm_from_dict` checks each number against its range (lengths and
+coordinates within 100 m, speeds, accelerations, rates and masses within
+1e-6 .. 1e6 of their units). An example::
 
-    type = "gantry" | "scara" | "serial"
-    base = [x, y, z, yaw]            # pose of the base in the cell (m, rad); default origin
-    capabilities = ["gripper", ...]  # what the arm can do
-    tools = ["screwdriver", ...]     # tool mounts
-    payload = 3.0                    # kg
-    home = [...]                     # joint vector it rests at (default per type)
-
-``gantry`` (Cartesian, stepper axes, S1.5)::
-
-    rails = { x = [0.0, 1.2], y = [0.0, 1.2], z = [0.0, 0.6] }   # required
-    wrist = true                     # with a wrist yaw joint
-    height = 0.8                     # bridge height above the base
-    hand = [0.06, 0.06, 0.1]
-    [arms.NAME.stepper]              # optional; S1.5 defaults
-    steps_per_turn = 400
-    step_length = 0.0000375          # m per step
-    max_rate = 15000.0               # steps/s
-    low_rate = 1000.0                # steps/s
-    curve = "light"                  # of curves = { light = 2.0, loaded = 1.0 } (m/s^2)
-    stop_accel = 4.0                 # steepest allowed deceleration, m/s^2
-
-``scara``::
-
-    link_lengths = [0.45, 0.4]
-    z_range = [0.0, 0.35]
-    elbow = "nearest" | "left" | "right"
-    max_velocity = [3.0, 4.0, 1.0, 6.0]        # per joint
-    max_acceleration = [10.0, 15.0, 5.0, 30.0]
-    max_jerk = [...]                           # optional: S-curves
-    joint_limits = [[lo, hi], ...]             # optional
-
-``serial``::
-
-    example = "6dof"                 # the built-in 6-DOF arm, or:
-    dh = [[a, alpha, d, offset], ...]
-    kinds = ["revolute", ...]
-    joint_limits, max_velocity, max_acceleration, max_jerk, radius
+    [arms.left]
+    type = "gantry"
+    base = [0.0, 0.0, 0.0, 0.0]          # x, y, z (m), yaw (rad)
+    rails = { x = [0.0, 1.2], y = [0.0, 1.2], z = [0.0, 0.6] }
+    capabilities = ["gripper"]
+    [arms.left.stepper]
+    curve = "loaded"
 
 Every error is a :class:`~multiarm.errors.ValidationError` whose message
 starts with ``where`` and the field (``cell.toml: arms.left.rails.x:
@@ -59,6 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -70,61 +46,367 @@ from workcell.arms.profiles import StepperDrive
 from workcell.arms.scara import Scara
 from workcell.arms.serial import SerialArm
 
-__all__ = ["ARM_TYPES", "arm_from_dict"]
+__all__ = ["ARM_KEYS", "ARM_TYPES", "ArmKey", "arm_from_dict", "arm_keys_markdown"]
 
 ARM_TYPES = ("gantry", "scara", "serial")
 
-_COMMON = {"type", "base", "capabilities", "tools", "payload", "home"}
+MAX_LENGTH = 100.0
+"""Largest length or coordinate in a cell, metres (and largest angle, radians)."""
+SMALL, LARGE = 1e-6, 1e6
+"""Bounds of speeds, accelerations, jerks, rates, times and masses, in their units."""
+
+
+@dataclass(frozen=True, slots=True)
+class ArmKey:
+    """One key of an ``[arms.NAME]`` table: the docs' reference row and the check's range.
+
+    Parameters
+    ----------
+    name : str
+        The key.
+    unit : str
+        Unit of its numbers (``""`` for none).
+    default : str
+        Its default, as written in the reference (``"required"`` when none).
+    meaning : str
+        One line for the reference.
+    lo, hi : float or None
+        Every number of the value must lie in ``[lo, hi]`` (checked by
+        :func:`arm_from_dict`); ``None`` for a value that is not numbers.
+    allowed : str
+        The allowed values when they are not a numeric range.
+    """
+
+    name: str
+    unit: str
+    default: str
+    meaning: str
+    lo: float | None = None
+    hi: float | None = None
+    allowed: str = ""
+
+    def allowed_text(self) -> str:
+        """The allowed range or values, as the reference prints them."""
+        if self.lo is None or self.hi is None:
+            return self.allowed
+        return f"{_num(self.lo)} .. {_num(self.hi)}" + (f"; {self.allowed}" if self.allowed else "")
+
+
+def _num(v: float) -> str:
+    if v == int(v) and abs(v) < 1e5:
+        return str(int(v))
+    return f"{v:g}"
+
+
+_L, _P = MAX_LENGTH, (SMALL, LARGE)
+ARM_KEYS: dict[str, tuple[ArmKey, ...]] = {
+    "common": (
+        ArmKey("type", "", "required", "the arm kind", allowed='"gantry", "scara", "serial"'),
+        ArmKey(
+            "base",
+            "m, m, m, rad",
+            "[0, 0, 0, 0]",
+            "[x, y, z, yaw] of the arm's base frame in the cell",
+            -_L,
+            _L,
+        ),
+        ArmKey(
+            "capabilities",
+            "",
+            '["gripper"]',
+            "what the arm can do (a task needs all of its own and its steps' capabilities); "
+            "[] is an arm with none, which can do only tasks needing none",
+            allowed="a list of names",
+        ),
+        ArmKey(
+            "tools",
+            "",
+            "[]",
+            "tool mounts: the tools of tasks it may do",
+            allowed="a list of names",
+        ),
+        ArmKey("payload", "kg", "2.0", "largest part mass it carries", *_P),
+        ArmKey(
+            "home",
+            "joint units",
+            "per kind, below",
+            "joint vector it rests at; its start by default",
+            -_L,
+            _L,
+            "within the joint limits",
+        ),
+        ArmKey(
+            "start",
+            "joint units",
+            "home",
+            "initial joint vector of the run; between tasks the arm parks here "
+            '(compile.park = "home")',
+            -_L,
+            _L,
+            "within the joint limits",
+        ),
+    ),
+    "gantry": (
+        ArmKey(
+            "rails",
+            "m",
+            "required",
+            "{ x = [lo, hi], y = [lo, hi], z = [lo, hi] }: travel of each axis, "
+            "in the base frame; z is the height of the tool point",
+            -_L,
+            _L,
+            "lo < hi",
+        ),
+        ArmKey("wrist", "", "true", "with a yaw joint turning the hand", allowed="true, false"),
+        ArmKey("yaw_limits", "rad", "[-pi, pi]", "limits of the wrist yaw", -_L, _L, "lo < hi"),
+        ArmKey("height", "m", "z hi + 0.15", "height of the bridge beam above the base", SMALL, _L),
+        ArmKey("hand", "m", "[0.06, 0.06, 0.1]", "size of the hand box [dx, dy, dz]", SMALL, _L),
+        ArmKey(
+            "stepper",
+            "",
+            "S1.5 defaults",
+            "the x, y, z stepper drives: an [arms.NAME.stepper] table, below",
+            allowed="a table",
+        ),
+    ),
+    "gantry.stepper": (
+        ArmKey("steps_per_turn", "steps", "400", "steps per motor turn (half-step mode)", 1, LARGE),
+        ArmKey(
+            "step_length",
+            "m",
+            "3.75e-05",
+            "arm travel per step",
+            1e-9,
+            0.1,
+            "top speed max_rate x step_length in 1e-06 .. 1e+06 m/s",
+        ),
+        ArmKey("max_rate", "steps/s", "15000", "top step rate (562.5 mm/s by default)", 1, LARGE),
+        ArmKey(
+            "low_rate",
+            "steps/s",
+            "1000",
+            "start/stop rate, no ramp; short moves run at it",
+            1,
+            LARGE,
+            "<= max_rate",
+        ),
+        ArmKey(
+            "curves",
+            "m/s^2",
+            "{ light = 2.0, loaded = 1.0 }",
+            "named accelerations of travel",
+            *_P,
+        ),
+        ArmKey("curve", "", '"light"', "the curve in use", allowed="a name of curves"),
+        ArmKey(
+            "stop_accel",
+            "m/s^2",
+            "4.0",
+            "steepest allowed deceleration (emergency stops)",
+            *_P,
+            ">= every curve",
+        ),
+        ArmKey(
+            "short_steps",
+            "steps",
+            "32",
+            "moves of at most this many steps run at low_rate",
+            0,
+            LARGE,
+        ),
+        ArmKey(
+            "homing_rate", "steps/s", "4000", "rate while seeking the end-of-rail switch", 1, LARGE
+        ),
+        ArmKey(
+            "switch_hysteresis", "steps", "40", "steps forward until the switch releases", 0, LARGE
+        ),
+    ),
+    "scara": (
+        ArmKey("link_lengths", "m", "[0.45, 0.4]", "lengths of link 1 and link 2", SMALL, _L),
+        ArmKey(
+            "z_range",
+            "m",
+            "[0.0, 0.35]",
+            "[lo, hi] height of the tool point (the quill)",
+            -_L,
+            _L,
+            "lo < hi",
+        ),
+        ArmKey("arm_height", "m", "z hi + 0.12", "height of the links above the base", SMALL, _L),
+        ArmKey(
+            "elbow",
+            "",
+            '"nearest"',
+            "IK branch: the one nearest the previous joints, or always left or right",
+            allowed='"nearest", "left", "right"',
+        ),
+        ArmKey(
+            "max_velocity",
+            "rad/s, rad/s, m/s, rad/s",
+            "[3.0, 4.0, 1.0, 6.0]",
+            "top speed of each joint (j1, j2, z, wrist)",
+            *_P,
+        ),
+        ArmKey(
+            "max_acceleration",
+            "rad/s^2, rad/s^2, m/s^2, rad/s^2",
+            "[10.0, 15.0, 5.0, 30.0]",
+            "acceleration limit of each joint",
+            *_P,
+        ),
+        ArmKey(
+            "max_jerk",
+            "rad/s^3, rad/s^3, m/s^3, rad/s^3",
+            "none (trapezoids)",
+            "jerk limit of each joint: S-curves",
+            *_P,
+        ),
+        ArmKey(
+            "joint_limits",
+            "rad, rad, m, rad",
+            "[±170°, ±150°, z_range, ±360°]",
+            "4 [lo, hi] pairs",
+            -_L,
+            _L,
+            "lo < hi",
+        ),
+        ArmKey("radius", "m", "0.04", "radius of the link capsules", SMALL, _L),
+    ),
+    "serial": (
+        ArmKey(
+            "example",
+            "",
+            "none",
+            "the built-in 6-DOF arm (about 0.9 m reach) instead of dh",
+            allowed='"6dof"',
+        ),
+        ArmKey(
+            "dh",
+            "m, rad, m, rad",
+            "required without example",
+            "standard Denavit-Hartenberg rows [a, alpha, d, offset], one a joint",
+            -_L,
+            _L,
+        ),
+        ArmKey(
+            "kinds",
+            "",
+            "all revolute",
+            "joint kinds, one a row of dh",
+            allowed='"revolute", "prismatic"',
+        ),
+        ArmKey(
+            "joint_limits",
+            "rad or m",
+            "[-pi, pi] each",
+            "one [lo, hi] pair a joint",
+            -_L,
+            _L,
+            "lo < hi",
+        ),
+        ArmKey(
+            "max_velocity",
+            "rad/s or m/s",
+            "2.0 each (6dof: [2.5, 2.5, 3, 5, 5, 7])",
+            "top speed of each joint",
+            *_P,
+        ),
+        ArmKey(
+            "max_acceleration",
+            "rad/s^2 or m/s^2",
+            "8.0 each (6dof: [8, 8, 10, 20, 20, 30])",
+            "acceleration limit of each joint",
+            *_P,
+        ),
+        ArmKey(
+            "max_jerk",
+            "rad/s^3 or m/s^3",
+            "none (trapezoids)",
+            "jerk limit of each joint: S-curves",
+            *_P,
+        ),
+        ArmKey("radius", "m", "0.05", "radius of the link capsules", SMALL, _L),
+    ),
+}
+"""Every key of an ``[arms.NAME]`` table, per section: ``"common"`` (every
+kind), ``"gantry"``, ``"gantry.stepper"``, ``"scara"``, ``"serial"``. The
+reference tables of ``docs/workcell.md`` are :func:`arm_keys_markdown`."""
+
+HOMES: dict[str, str] = {
+    "gantry": "[x lo, middle of y, z hi, 0]: at the low-x end of its x rail, in the middle of "
+    "the y rail, raised to the top of z, tool down",
+    "scara": "[0, pi/2, z hi, 0]: link 1 along the base's x axis, the elbow bent a right angle "
+    "to the left, so the hand stands at (l1, l2) in the base frame (0.45 m ahead, 0.4 m to the "
+    "left with the default links), raised: it reaches across the table, so a SCARA next to other "
+    "arms needs a start that points away from them",
+    "serial": "all joints 0 (6dof: [0, 0.3, 0.9, 0, 1.2, 0], the hand in front of the base, "
+    "pointing down)",
+}
+"""Where each kind's default ``home`` (and so its default ``start``) points."""
+
 _KEYS = {
-    "gantry": _COMMON | {"rails", "wrist", "height", "hand", "stepper", "yaw_limits"},
-    "scara": _COMMON
-    | {
-        "link_lengths",
-        "z_range",
-        "arm_height",
-        "elbow",
-        "max_velocity",
-        "max_acceleration",
-        "max_jerk",
-        "joint_limits",
-        "radius",
-    },
-    "serial": _COMMON
-    | {
-        "example",
-        "dh",
-        "kinds",
-        "joint_limits",
-        "max_velocity",
-        "max_acceleration",
-        "max_jerk",
-        "radius",
-    },
+    kind: {k.name for k in ARM_KEYS["common"] if k.name != "start"}
+    | {k.name for k in ARM_KEYS[kind]}
+    for kind in ARM_TYPES
 }
-_STEPPER = {
-    "steps_per_turn",
-    "step_length",
-    "max_rate",
-    "low_rate",
-    "curves",
-    "curve",
-    "stop_accel",
-    "short_steps",
-    "homing_rate",
-    "switch_hysteresis",
-}
+_STEPPER = {k.name for k in ARM_KEYS["gantry.stepper"]}
+_META = {section: {k.name: k for k in keys} for section, keys in ARM_KEYS.items()}
+
+
+def arm_keys_markdown() -> str:
+    """The reference tables of the arm keys (``docs/workcell.md``), from :data:`ARM_KEYS`."""
+    titles = {
+        "common": "Every arm",
+        "gantry": '`type = "gantry"`',
+        "gantry.stepper": "`[arms.NAME.stepper]` (gantry)",
+        "scara": '`type = "scara"`',
+        "serial": '`type = "serial"`',
+    }
+    out: list[str] = []
+    for section, keys in ARM_KEYS.items():
+        out += [f"**{titles[section]}**", ""]
+        out += ["| key | unit | default | allowed | meaning |", "|---|---|---|---|---|"]
+        for k in keys:
+            cells = (f"`{k.name}`", k.unit, k.default, k.allowed_text(), k.meaning)
+            out.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+        if section in HOMES:
+            out += ["", f"Default `home`: {HOMES[section]}."]
+        out.append("")
+    return "\n".join(out).rstrip() + "\n"
 
 
 class _Fields:
-    def __init__(self, data: Mapping[str, Any], where: str) -> None:
+    def __init__(self, data: Mapping[str, Any], where: str, section: str = "") -> None:
         self.data = data
         self.where = where
+        self.section = section
 
     def fail(self, key: str, msg: str) -> ValidationError:
         return ValidationError(f"{self.where}.{key}: {msg}")
 
+    def _meta(self, key: str, bounds: ArmKey | None) -> ArmKey | None:
+        if bounds is not None:
+            return bounds
+        return _META.get(self.section, {}).get(key) or _META["common"].get(key)
+
+    def _in_range(self, key: str, values: list[float], bounds: ArmKey | None) -> None:
+        meta = self._meta(key, bounds)
+        if meta is None or meta.lo is None or meta.hi is None:
+            return
+        lo, hi = meta.lo, meta.hi
+        bad = [v for v in values if not lo <= v <= hi]
+        if bad:
+            unit = f" {meta.unit}" if meta.unit else ""
+            raise self.fail(
+                key, f"{bad[0]:g} is out of range: every value must be in [{lo:g}, {hi:g}]{unit}"
+            )
+
     def number(
-        self, key: str, default: float | None = None, positive: bool = False
+        self,
+        key: str,
+        default: float | None = None,
+        positive: bool = False,
+        bounds: ArmKey | None = None,
     ) -> float | None:
         if key not in self.data:
             return default
@@ -133,9 +415,12 @@ class _Fields:
             raise self.fail(key, f"expected a number, got {v!r}")
         if positive and v <= 0:
             raise self.fail(key, f"must be > 0, got {v!r}")
+        self._in_range(key, [float(v)], bounds)
         return float(v)
 
-    def numbers(self, key: str, n: int | None = None, positive: bool = False) -> list[float] | None:
+    def numbers(
+        self, key: str, n: int | None = None, positive: bool = False, bounds: ArmKey | None = None
+    ) -> list[float] | None:
         if key not in self.data:
             return None
         v = self.data[key]
@@ -147,7 +432,9 @@ class _Fields:
             raise self.fail(key, f"expected {count}numbers, got {v!r}")
         if positive and any(x <= 0 for x in v):
             raise self.fail(key, f"every value must be > 0, got {v!r}")
-        return [float(x) for x in v]
+        out = [float(x) for x in v]
+        self._in_range(key, out, bounds)
+        return out
 
     def pairs(self, key: str, n: int | None = None) -> list[list[float]] | None:
         if key not in self.data:
@@ -164,7 +451,9 @@ class _Fields:
         )
         if not ok or (n is not None and len(v) != n):
             raise self.fail(key, f"expected {n or ''} [low, high] pairs with low < high, got {v!r}")
-        return [[float(a), float(b)] for a, b in v]
+        out = [[float(a), float(b)] for a, b in v]
+        self._in_range(key, [x for p in out for x in p], None)
+        return out
 
     def names(self, key: str) -> list[str]:
         v = self.data.get(key, [])
@@ -191,7 +480,7 @@ def _stepper(data: Any, where: str) -> StepperDrive:
     if not isinstance(data, Mapping):
         raise ValidationError(f"{where}: expected a table, got {data!r}")
     _check_keys(data, _STEPPER, where)
-    f = _Fields(data, where)
+    f = _Fields(data, where, "gantry.stepper")
     kw: dict[str, Any] = {}
     for key in ("step_length", "max_rate", "low_rate", "stop_accel", "homing_rate"):
         v = f.number(key, positive=True)
@@ -202,22 +491,29 @@ def _stepper(data: Any, where: str) -> StepperDrive:
             v = data[key]
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                 raise f.fail(key, f"expected a non-negative integer, got {v!r}")
+            f._in_range(key, [float(v)], None)
             kw[key] = v
     if "curves" in data:
         c = data["curves"]
         if not isinstance(c, Mapping) or not c:
             raise f.fail("curves", f"expected a table of name = acceleration, got {c!r}")
-        kw["curves"] = {
-            str(k): _Fields(c, f"{where}.curves").number(str(k), positive=True) for k in c
-        }
+        cf = _Fields(c, f"{where}.curves")
+        bounds = _META["gantry.stepper"]["curves"]
+        kw["curves"] = {str(k): cf.number(str(k), positive=True, bounds=bounds) for k in c}
     if "curve" in data:
         if not isinstance(data["curve"], str):
             raise f.fail("curve", f"expected a curve name, got {data['curve']!r}")
         kw["curve"] = data["curve"]
     try:
-        return StepperDrive(**kw)
+        drive = StepperDrive(**kw)
     except ValidationError as exc:
         raise ValidationError(f"{where}: {exc}") from None
+    if not SMALL <= drive.top_speed <= LARGE:
+        raise ValidationError(
+            f"{where}: top speed max_rate x step_length = {drive.top_speed:g} m/s is out of range: "
+            f"it must be in [{SMALL:g}, {LARGE:g}] m/s"
+        )
+    return drive
 
 
 def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
@@ -241,18 +537,23 @@ def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
     ValidationError
         Naming the field.
     """
+    if not isinstance(name, str) or not name.strip() or "|" in name or "/" in name:
+        raise ValidationError(
+            f"{where}: an arm's name must be non-empty text without '|' or '/', got {name!r}"
+        )
     if not isinstance(data, Mapping):
         raise ValidationError(f"{where}: expected a table, got {data!r}")
     kind = data.get("type")
     if kind not in ARM_TYPES:
         raise ValidationError(f"{where}.type: expected one of {', '.join(ARM_TYPES)}, got {kind!r}")
     _check_keys(data, _KEYS[kind], where)
-    f = _Fields(data, where)
+    f = _Fields(data, where, kind)
     base_v = f.numbers("base", 4)
     base = pose_xyz_yaw(base_v, f"{where}.base") if base_v is not None else np.eye(4)
     common: dict[str, Any] = {
         "base": base,
-        "capabilities": f.names("capabilities") or ["gripper"],
+        # an empty list is an arm with no capability (docs/workcell.md), not the default
+        "capabilities": f.names("capabilities") if "capabilities" in data else ["gripper"],
         "tools": f.names("tools"),
         "payload": f.number("payload", 2.0, positive=True),
     }
@@ -271,7 +572,7 @@ def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
             rf = _Fields(rails_d, f"{where}.rails")
             rails = {}
             for axis in ("x", "y", "z"):
-                v = rf.numbers(axis, 2)
+                v = rf.numbers(axis, 2, bounds=_META["gantry"]["rails"])
                 if v is None:
                     raise rf.fail(axis, "missing rail [low, high]")
                 if not v[0] < v[1]:
@@ -288,6 +589,8 @@ def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
             if (hand := f.numbers("hand", 3, positive=True)) is not None:
                 kw["hand"] = tuple(hand)
             if (yl := f.numbers("yaw_limits", 2)) is not None:
+                if not yl[0] < yl[1]:
+                    raise f.fail("yaw_limits", f"needs low < high, got {yl}")
                 kw["yaw_limits"] = tuple(yl)
             return CartesianGantry(name, **kw, **common)
         if kind == "scara":
@@ -317,14 +620,23 @@ def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
             for key in ("max_velocity", "max_acceleration", "max_jerk"):
                 if (v := f.numbers(key, 6, positive=True)) is not None:
                     kw[key] = v
+            if "kinds" in data:
+                raise f.fail("kinds", "the 6dof example has its own joint kinds: leave 'kinds' out")
             if (jl := f.pairs("joint_limits", 6)) is not None:
                 kw["joint_limits"] = jl
-            return SerialArm.example_6dof(name, **kw, **common)
+            if (r := f.number("radius", positive=True)) is not None:
+                kw["radius"] = r
+            try:
+                return SerialArm.example_6dof(name, **kw, **common)
+            except ValidationError as exc:
+                raise ValidationError(f"{where}: {exc}") from None
         dh = data.get("dh")
         if not isinstance(dh, list) or not dh:
             raise f.fail("dh", f"expected rows of [a, alpha, d, offset], got {dh!r}")
         for i, row in enumerate(dh):
-            _Fields({"row": row}, f"{where}.dh[{i}]").numbers("row", 4)
+            _Fields({"row": row}, f"{where}.dh[{i}]").numbers(
+                "row", 4, bounds=_META["serial"]["dh"]
+            )
         n = len(dh)
         if "kinds" in data:
             kinds = f.names("kinds")
