@@ -56,6 +56,7 @@ def test_cell_file_example_in_docs_loads() -> None:
         "workcell.md",
         "networks.md",
         "simulation.md",
+        "plots.md",
         "README",
     ],
 )
