@@ -1021,9 +1021,11 @@ def build_problem(instance: InstanceSpec) -> Problem:
     from workcell.compile import compile_cell
 
     if instance.source in EXAMPLES:
-        return compile_cell(load_example(instance.source))
+        return compile_cell(load_example(instance.source)).problem
     path = Path(instance.source)
-    return compile_cell(load_cell(path if path.is_absolute() else Path(instance.base_dir) / path))
+    return compile_cell(
+        load_cell(path if path.is_absolute() else Path(instance.base_dir) / path)
+    ).problem
 
 
 def _solve(problem: Problem, config: SolverConfig, seed: int) -> Result:
