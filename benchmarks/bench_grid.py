@@ -215,7 +215,8 @@ def main(argv: list[str] | None = None) -> Path:
     df = run_table_sweep(NAME, args, out)
     m = measurements(df)
     png = plot(m, out / "grid.png" if args.quick else DOCS_PLOT)
-    path = publish(NAME, df, table(m), out, quick=args.quick, rows=m, extra={"plot": str(png)})
+    where = png.relative_to(DOCS_PLOT.parents[2]) if png == DOCS_PLOT else png.name
+    path = publish(NAME, df, table(m), out, quick=args.quick, rows=m, extra={"plot": str(where)})
     print(path.read_text())
     return path
 
