@@ -41,7 +41,7 @@ def _run_way(way: str, sweep: Any, out: Path, workers: int) -> dict[str, Any]:
         client = Client(cluster)  # type: ignore[no-untyped-call]
         start = time.perf_counter() - t0
         try:
-            o = run_sweep(sweep, scheduler=client, out=out, progress=False)
+            o = run_sweep(sweep, dask_address=client, out=out, progress=False)
         finally:
             client.close()  # type: ignore[no-untyped-call]
             cluster.close()

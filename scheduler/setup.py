@@ -25,15 +25,13 @@ from __future__ import annotations
 import math
 from collections import OrderedDict
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any, Literal, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
 from multiarm.errors import UsageError, ValidationError
 from multiarm.types import FloatArray, IntArray
-
-if TYPE_CHECKING:
-    from scheduler.problem import Problem
+from scheduler.view import ProblemView
 
 __all__ = [
     "BoundSetup",
@@ -81,7 +79,7 @@ class KernelSetup(NamedTuple):
     mode_slot: IntArray
 
 
-def _layout(problem: Problem) -> tuple[IntArray, IntArray, IntArray, list[IntArray]]:
+def _layout(problem: ProblemView) -> tuple[IntArray, IntArray, IntArray, list[IntArray]]:
     """Per arm: block offsets, mode counts, each mode's slot, and the arm's modes."""
     A, M = problem.n_arms, problem.n_modes
     mode_arm = np.asarray(problem.mode_arm, dtype=np.int64)
@@ -96,7 +94,7 @@ def _layout(problem: Problem) -> tuple[IntArray, IntArray, IntArray, list[IntArr
 
 
 def _table_setup(
-    problem: Problem, block: Callable[[int, IntArray], FloatArray] | None
+    problem: ProblemView, block: Callable[[int, IntArray], FloatArray] | None
 ) -> KernelSetup:
     """A :class:`KernelSetup` whose arm blocks come from ``block(arm, modes)``,
     shape (len(modes) + 1, len(modes)); ``None``: no setup (kind 0)."""
@@ -116,7 +114,7 @@ class BoundSetup:
 
     def __init__(
         self,
-        problem: Problem,
+        problem: ProblemView,
         row_fn: Callable[[int, int], FloatArray],
         zero: bool = False,
         cache_rows: int = 8192,
@@ -228,7 +226,7 @@ class BoundSetup:
 class Setup:
     """Base class of setup-time models."""
 
-    def bind(self, problem: Problem) -> BoundSetup:
+    def bind(self, problem: ProblemView) -> BoundSetup:
         """The setup times of ``problem``, looked up and cached per row.
 
         Raises
@@ -238,7 +236,7 @@ class Setup:
         """
         raise UsageError(f"{type(self).__name__} does not implement Setup.bind")
 
-    def kernel_data(self, problem: Problem) -> KernelSetup:
+    def kernel_data(self, problem: ProblemView) -> KernelSetup:
         """The setup times of ``problem`` for the placement kernel.
 
         This default reads the problem's cached rows (:meth:`BoundSetup.row`)
@@ -247,7 +245,7 @@ class Setup:
 
         Parameters
         ----------
-        problem : Problem
+        problem : ProblemView
             The problem this setup belongs to.
 
         Returns
@@ -277,10 +275,10 @@ class Setup:
 class NoSetup(Setup):
     """No setup time (e.g. FJSP)."""
 
-    def bind(self, problem: Problem) -> BoundSetup:
+    def bind(self, problem: ProblemView) -> BoundSetup:
         return BoundSetup(problem, lambda a, p: np.zeros(problem.n_tasks), zero=True)
 
-    def kernel_data(self, problem: Problem) -> KernelSetup:
+    def kernel_data(self, problem: ProblemView) -> KernelSetup:
         """No setup: kind 0, nothing stored (see :meth:`Setup.kernel_data`)."""
         return _table_setup(problem, None)
 
@@ -298,7 +296,7 @@ class MatrixSetup(Setup):
                 f"setup matrix must have shape (A, T + 1, T), got {self.times.shape}"
             )
 
-    def bind(self, problem: Problem) -> BoundSetup:
+    def bind(self, problem: ProblemView) -> BoundSetup:
         A, T = problem.n_arms, problem.n_tasks
         if self.times.shape != (A, T + 1, T):
             raise ValidationError(
@@ -306,7 +304,7 @@ class MatrixSetup(Setup):
             )
         return BoundSetup(problem, lambda a, p: self.times[a, p + 1])
 
-    def kernel_data(self, problem: Problem) -> KernelSetup:
+    def kernel_data(self, problem: ProblemView) -> KernelSetup:
         """The matrix entries the arms can use (see :meth:`Setup.kernel_data`)."""
         tasks_of = np.asarray(problem.mode_task)
 
@@ -355,7 +353,7 @@ class TravelSetup(Setup):
             raise ValidationError(f"metric must be 'euclidean' or 'manhattan', not {metric!r}")
         self.metric = metric
 
-    def bind(self, problem: Problem) -> BoundSetup:
+    def bind(self, problem: ProblemView) -> BoundSetup:
         A, M = problem.n_arms, problem.n_modes
         if self.start.shape != (M, 3) or self.end.shape != (M, 3):
             raise ValidationError(f"travel setup needs (M, 3) = {(M, 3)} start and end points")
@@ -411,7 +409,7 @@ class TravelSetup(Setup):
 
         return BoundSetup(problem, row, min_in_fn=min_in, time_fn=one)
 
-    def kernel_data(self, problem: Problem) -> KernelSetup:
+    def kernel_data(self, problem: ProblemView) -> KernelSetup:
         """The points, speeds and fixed times packed for the kernel, which
         computes each travel time as :meth:`bind` does (kind 2 Euclidean, 3
         Manhattan; see :class:`KernelSetup`): no table to build or to read
@@ -448,7 +446,7 @@ class FunctionSetup(Setup):
     def __init__(self, fn: Callable[[int, int, int], float]) -> None:
         self.fn = fn
 
-    def bind(self, problem: Problem) -> BoundSetup:
+    def bind(self, problem: ProblemView) -> BoundSetup:
         mode_of = problem.mode_of
 
         def row(a: int, prev: int) -> FloatArray:

@@ -29,13 +29,10 @@ import bisect
 import itertools
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 from multiarm.errors import InternalError
 from multiarm.types import FloatArray
-
-if TYPE_CHECKING:
-    from scheduler.problem import Problem
+from scheduler.view import ProblemView
 
 __all__ = ["ModeShape", "Shapes", "merge_intervals"]
 
@@ -135,7 +132,7 @@ class ModeShape:
 class Shapes:
     """The :class:`ModeShape` of every mode of a problem (computed once)."""
 
-    def __init__(self, problem: Problem) -> None:
+    def __init__(self, problem: ProblemView) -> None:
         self.problem = problem
 
     @cached_property

@@ -31,7 +31,7 @@ Sub-commands:
     Run the benchmark scripts (``--quick`` for a smoke run).
 ``sweep FILE``
     Run a sweep file (:mod:`workcell.experiments`) in a local process pool,
-    or on a Dask cluster with ``--scheduler ADDRESS``; resumes an
+    or on a Dask cluster with ``--dask-address ADDRESS``; resumes an
     interrupted sweep.
 """
 
@@ -780,19 +780,21 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """Run a sweep file locally or on a Dask cluster; results go to Parquet."""
-    from workcell.experiments import load_sweep, run_sweep
+    from workcell.experiments import check_dask_address, load_sweep, run_sweep
 
+    if args.dask_address:
+        check_dask_address(args.dask_address)
     sweep = load_sweep(args.file)
     where = (
-        f"on {args.scheduler}"
-        if args.scheduler
+        f"on {args.dask_address}"
+        if args.dask_address
         else f"{args.workers or sweep.workers or os.cpu_count()} processes"
     )
     print(f"sweep {sweep.name!r}: {len(sweep.runs())} runs, {where}", flush=True)
     try:
         outcome = run_sweep(
             sweep,
-            scheduler=args.scheduler,
+            dask_address=args.dask_address,
             workers=args.workers,
             out=args.out,
             progress=not args.no_progress,
@@ -917,7 +919,14 @@ def build_parser() -> argparse.ArgumentParser:
         "sweep", help="run a sweep file (TOML) locally or on a Dask cluster; results as Parquet"
     )
     p.add_argument("file", metavar="FILE")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler, e.g. tcp://host:8786")
+    p.add_argument(
+        "--dask-address",
+        "--scheduler",
+        dest="dask_address",
+        metavar="ADDRESS",
+        help="run on the Dask cluster whose scheduler is at ADDRESS, e.g. tcp://host:8786 "
+        "(--scheduler is the old name)",
+    )
     p.add_argument("--workers", type=int, metavar="N", help="local processes (default: CPU count)")
     p.add_argument("--out", metavar="PATH", help="results file (default: the sweep file's out)")
     p.add_argument("--retry-failed", action="store_true", help="run failed runs again")

@@ -64,6 +64,7 @@ from multiarm.errors import NoFeasibleSchedule, Unreachable, UsageError, Validat
 from multiarm.types import FloatArray, JointVector
 from scheduler import MatrixSetup, Model, Problem, Setup, Window
 from scheduler.setup import BoundSetup
+from scheduler.view import ProblemView
 from tasklib.model import Task
 from workcell.arms import DriveArm, JointTrajectory, Segment
 from workcell.arms.trajectory import Interpolation, move_segment
@@ -601,7 +602,7 @@ class JointTravelSetup(Setup):
         out[tasks] = self.arms[a].move_times(np.broadcast_to(q0, q1.shape), q1)
         return out
 
-    def bind(self, problem: Problem) -> BoundSetup:
+    def bind(self, problem: ProblemView) -> BoundSetup:
         return BoundSetup(problem, lambda a, prev: self._row(problem.n_tasks, a, prev))
 
     def to_dict(self) -> dict[str, Any]:

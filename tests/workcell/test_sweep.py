@@ -331,3 +331,44 @@ options = {{ workers = 1, max_deterministic_time = 0.5 }}
     table = fjsp_table(df)
     assert "| sfjs01 | 4 | 2 | 66 | 66.0 | 66 (0.0%" in table
     assert "- **fattahi**: mean gap to BKS tree 0.00%" in table
+
+
+@pytest.mark.parametrize(
+    "address", ["tcp//host", "tcp://host:99999", "http://host:8786", "host:port", "", "a b"]
+)
+def test_a_malformed_dask_address_is_refused_before_any_run(address: str, tmp_path: Path) -> None:
+    from workcell.experiments import check_dask_address, parse_sweep, run_sweep
+
+    with pytest.raises(UsageError, match=r"--dask-address: .* is not a Dask scheduler address"):
+        check_dask_address(address)
+    sweep = parse_sweep(
+        '[sweep]\nname = "t"\n[[instances]]\nkind = "generated"\nsizes = [[2, 4, 1, 0]]\n'
+        'seeds = [0]\n[[solvers]]\nsolver = "greedy"\n',
+        filename="t.toml",
+    )
+    out = tmp_path / "r.parquet"
+    with pytest.raises(UsageError, match="dask-address"):
+        run_sweep(sweep, dask_address=address, out=out, progress=False)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("address", ["tcp://127.0.0.1:8786", "localhost:8786", "tls://[::1]:1"])
+def test_a_well_formed_dask_address_passes(address: str) -> None:
+    from workcell.experiments import check_dask_address
+
+    assert check_dask_address(address) == address
+
+
+def test_the_old_scheduler_keyword_still_works_and_warns(tmp_path: Path) -> None:
+    from workcell.experiments import parse_sweep, run_sweep
+
+    sweep = parse_sweep(
+        '[sweep]\nname = "t"\n[[instances]]\nkind = "generated"\nsizes = [[2, 4, 1, 0]]\n'
+        'seeds = [0]\n[[solvers]]\nsolver = "greedy"\n',
+        filename="t.toml",
+    )
+    with (
+        pytest.warns(DeprecationWarning, match="dask_address"),
+        pytest.raises(UsageError, match="dask-address"),
+    ):
+        run_sweep(sweep, scheduler="tcp//bad", out=tmp_path / "r.parquet", progress=False)

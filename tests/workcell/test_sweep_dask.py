@@ -50,9 +50,13 @@ def test_a_local_cluster_reproduces_the_local_run(tmp_path: Path) -> None:
         ) as cluster,
         distributed.Client(cluster) as client,
     ):
-        remote = run_sweep(sweep, scheduler=client, out=tmp_path / "dask.parquet", progress=False)
+        remote = run_sweep(
+            sweep, dask_address=client, out=tmp_path / "dask.parquet", progress=False
+        )
         # the address form connects a client of its own
-        again = run_sweep(sweep, scheduler=cluster.scheduler_address, out=tmp_path / "dask.parquet")
+        again = run_sweep(
+            sweep, dask_address=cluster.scheduler_address, out=tmp_path / "dask.parquet"
+        )
     assert (local.ran, remote.ran, remote.failed) == (12, 12, 0)
     assert (again.ran, again.skipped) == (0, 12)  # resumed: everything was done
     a = local.results().set_index("key").sort_index()

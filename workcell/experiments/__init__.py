@@ -4,17 +4,23 @@
   configurations x seeds x repetitions, and ``benchmark`` instances: named
   measurement functions whose rows are stored like solver runs); :func:`run_sweep` runs it in a local
   process pool or on a ``dask.distributed`` cluster, streaming results,
-  resuming where an interrupted sweep stopped, recording failures
-  (:mod:`workcell.experiments.sweep`).
+  resuming where an interrupted sweep stopped, recording failures. The
+  machinery is split by job: :mod:`~workcell.experiments.spec` (the sweep
+  file's schema and validation), :mod:`~workcell.experiments.grid` (its
+  records), :mod:`~workcell.experiments.instances` (problem factories),
+  :mod:`~workcell.experiments.runner` (one run, through the scheduler),
+  :mod:`~workcell.experiments.executors` (local pool, Dask);
+  :mod:`workcell.experiments.sweep` gathers the public names.
 * :func:`read_results` reads the Parquet results (one row per run, with
   provenance) into pandas (:mod:`workcell.experiments.results`).
 * :mod:`workcell.experiments.analysis`: performance profiles, gap over time,
   time to target, scaling and box plots, and the benchmark tables (imported
   on its own: it needs matplotlib).
 
-The command ``multiarm sweep FILE [--scheduler ADDRESS] [--workers N]`` runs a sweep file.
+The command ``multiarm sweep FILE [--dask-address ADDRESS] [--workers N]`` runs a sweep file.
 """
 
+from workcell.experiments.executors import check_dask_address
 from workcell.experiments.results import COLUMNS, read_results, write_results
 from workcell.experiments.sweep import (
     BENCHMARK,
@@ -41,6 +47,7 @@ __all__ = [
     "SweepOutcome",
     "benchmark_function",
     "build_problem",
+    "check_dask_address",
     "load_sweep",
     "parse_sweep",
     "read_results",

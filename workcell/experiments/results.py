@@ -56,7 +56,7 @@ from multiarm.errors import FormatError, UsageError
 
 if TYPE_CHECKING:
     from scheduler import Problem, Result
-    from workcell.experiments.sweep import Run
+    from workcell.experiments.grid import Run
 
 __all__ = [
     "COLUMNS",

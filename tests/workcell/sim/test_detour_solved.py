@@ -2,7 +2,7 @@
 
 No built-in cell reaches it: with the space grid the zones keep arms apart
 (the geometric check never stops one), and without it (``scara4`` with
-``separate_arms = false``) every geometric stop has the other arm standing
+``grid = 0``) every geometric stop has the other arm standing
 on the mover's next station (``goal_in_collision``: no detour, the arms back
 off instead). The cell here is ``scara4`` without the space grid plus a
 fifth SCARA with no capability, ``pole``, that never works and stands at its

@@ -1,0 +1,111 @@
+"""One run of a sweep: build the problem, solve it through the scheduler, record the row."""
+
+from __future__ import annotations
+
+import math
+import time
+import traceback
+from dataclasses import fields
+from typing import TYPE_CHECKING, Any
+
+from scheduler import REGISTRY, lower_bound, solve, validate
+from scheduler.cpsat import solve_cpsat
+from scheduler.kernel import warm_up
+from scheduler.solve import CpSatOptions
+from workcell.experiments.grid import Run, SolverConfig
+from workcell.experiments.instances import benchmark_function, build_problem
+from workcell.experiments.results import benchmark_row, error_row, result_row
+
+if TYPE_CHECKING:
+    from scheduler import Problem, Result
+
+__all__ = ["run_one"]
+
+
+def _solve(problem: Problem, config: SolverConfig, seed: int) -> Result:
+    opts = dict(config.options)
+    cls = REGISTRY[config.solver].options
+    if (
+        config.solver == "cpsat"
+        and "max_deterministic_time" in opts
+        and "max_deterministic_time" not in {f.name for f in fields(cls)}
+    ):
+        # CP-SAT's deterministic time is a work limit: the run depends on the seed only
+        # (passed straight to solve_cpsat where CpSatOptions does not take it)
+        dt = float(opts.pop("max_deterministic_time"))
+        o = CpSatOptions(**opts)
+        return solve_cpsat(
+            problem,
+            config.time_limit,
+            seed,
+            workers=o.workers,
+            hint=o.hint,
+            log=o.log,
+            max_deterministic_time=dt,
+        )
+    options = cls(**opts)
+    return solve(problem, config.solver, time_limit=config.time_limit, seed=seed, options=options)  # type: ignore[arg-type]
+
+
+def run_one(run: Run) -> dict[str, Any]:
+    """Execute one run and return its results row; never raises for the run's own failures.
+
+    The problem is built (cached per process), solved, and the schedule
+    checked by :func:`scheduler.validate`, whose makespan is recorded; any
+    exception is recorded as status ``"error"`` with its type and message.
+    The scheduler's compiled kernel is loaded before the solver's clock
+    starts (the seconds it took, once per process, go to ``warmup_time``).
+
+    A ``benchmark`` run calls its measurement function with
+    ``seed=run.seed`` and the instance's parameters; what it returns (one
+    dict, or a list of dicts: rows of a table) is recorded as JSON in the
+    ``metrics`` column, with status ``"measured"``.
+
+    Parameters
+    ----------
+    run : Run
+
+    Returns
+    -------
+    dict
+        One row (:data:`workcell.experiments.results.COLUMNS`).
+    """
+    t0 = time.perf_counter()
+    started = time.time()
+    try:
+        if run.instance.kind == "benchmark":
+            fn = benchmark_function(run.instance)
+            t0 = time.perf_counter()
+            measured = fn(seed=run.seed, **dict(run.instance.params))
+            return benchmark_row(run, measured, wall_time=time.perf_counter() - t0, started=started)
+        problem = build_problem(run.instance)
+        build = time.perf_counter() - t0
+        warmup = _warm_up()
+        result = _solve(problem, run.config, run.seed)
+        if result.stats.interrupted:  # Ctrl-C cut the search short: not a result to keep
+            raise KeyboardInterrupt
+        makespan = validate(problem, result.schedule) if result.schedule is not None else math.inf
+        return result_row(
+            run,
+            problem,
+            result,
+            makespan,
+            lower_bound(problem),
+            build_time=build,
+            wall_time=time.perf_counter() - t0,
+            started=started,
+            warmup_time=warmup,
+        )
+    except Exception as exc:  # recorded, never lost: the sweep goes on
+        return error_row(
+            run,
+            exc,
+            "".join(traceback.format_exception(exc)[-3:]),
+            wall_time=time.perf_counter() - t0,
+            started=started,
+        )
+
+
+def _warm_up() -> float:
+    """Load the scheduler's compiled kernel before a solver's clock starts (seconds taken)."""
+    return float(warm_up(announce=lambda _msg: None))
