@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from benchmarks.common import output_dir, publish, run_table_sweep, sweep_arguments
-from workcell import compile_cell_detailed, load_example
+from workcell import compile_cell, load_example
 from workcell.oracle import CellOracle
 
 
@@ -53,10 +53,10 @@ def compile_times(seed: int, cells: tuple[str, ...] | list[str]) -> list[dict[st
     for name in cells:
         cell = load_example(name)
         t0 = time.perf_counter()
-        cc = compile_cell_detailed(cell)
+        cc = compile_cell(cell)
         cold = time.perf_counter() - t0
         t0 = time.perf_counter()
-        compile_cell_detailed(cell)
+        compile_cell(cell)
         warm = time.perf_counter() - t0
         m = cc.problem.n_modes
         rows.append(
@@ -79,7 +79,7 @@ def detours(seed: int, every: int = 1) -> dict[str, Any]:
     ``seed`` is unused (the oracle's planner is seeded by the cell file).
     """
     cell = replace(load_example("scara4"), park="last")
-    cc = compile_cell_detailed(cell)
+    cc = compile_cell(cell)
     p, o = cc.problem, cc.problem.blocking
     assert isinstance(o, CellOracle)
     t0 = time.perf_counter()

@@ -204,7 +204,7 @@ def makespan_part(quick: bool, seed: int = SEED) -> tuple[list[dict[str, Any]], 
     from workcell.sim.supersigma import run_schedule
 
     cell = workcell.load_example(CELL)
-    compiled = workcell.compile_cell_detailed(cell)
+    compiled = workcell.compile_cell(cell)
     problem = compiled.problem
     sched = scheduler.solve(problem, solver="greedy", time_limit=5.0, seed=seed).schedule
     if sched is None:

@@ -44,7 +44,7 @@ import numpy as np
 from benchmarks.common import table_main
 from multiarm.errors import MultiarmError
 from scheduler import solve, validate
-from workcell import compile_cell_detailed, load_example
+from workcell import compile_cell, load_example
 from workcell.sim.faults import FaultPlan
 from workcell.sim.run import simulate
 
@@ -175,7 +175,7 @@ def measure(
     """The whole table, side by side on one plan: the speed rows and the fault
     scenarios with and without re-solving (one sweep run)."""
     t0 = time.perf_counter()
-    cc = compile_cell_detailed(load_example(cell))
+    cc = compile_cell(load_example(cell))
     compile_s = time.perf_counter() - t0
     p = cc.problem
     r = solve(p, "tree", time_limit=time_limit, seed=seed)

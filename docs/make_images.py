@@ -34,7 +34,7 @@ FAULTS: list[dict[str, Any]] = [
 def main() -> list[Path]:
     """Compile, plan, simulate, draw; return the images written."""
     from scheduler import solve
-    from workcell import compile_cell_detailed, load_example, simulate
+    from workcell import compile_cell, load_example, simulate
     from workcell.viz import (
         gantt,
         joint_timeline,
@@ -44,7 +44,7 @@ def main() -> list[Path]:
     )
 
     OUT.mkdir(exist_ok=True)
-    cc = compile_cell_detailed(load_example("supersigma"))
+    cc = compile_cell(load_example("supersigma"))
     plan = solve(cc.problem, "greedy", seed=0).schedule
     run = simulate(cc, plan, seed=0, faults=FAULTS)
     end = float(run.metrics.executed_makespan)

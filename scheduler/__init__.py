@@ -22,7 +22,7 @@ from scheduler.io import (
     schedule_from_dict,
 )
 from scheduler.plan import Plan
-from scheduler.problem import BlockingOracle, Model, Problem, Window
+from scheduler.problem import BlockingOracle, HasProblem, Model, Problem, ProblemLike, Window
 from scheduler.result import Progress, Result, SearchStats, SolveStatus
 from scheduler.schedule import Reservation, Schedule, ScheduleError, validate
 from scheduler.setup import FunctionSetup, MatrixSetup, NoSetup, Setup, TravelSetup
@@ -36,12 +36,14 @@ __all__ = [
     "CpSatOptions",
     "FunctionSetup",
     "GreedyOptions",
+    "HasProblem",
     "LowerBounds",
     "MatrixSetup",
     "Model",
     "NoSetup",
     "Plan",
     "Problem",
+    "ProblemLike",
     "Progress",
     "Reservation",
     "Result",

@@ -53,13 +53,21 @@ from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
-from multiarm.errors import CycleError, MultiarmError, ValidationError
+from multiarm.errors import CycleError, MultiarmError, UsageError, ValidationError
 from multiarm.graph import find_cycle
 from multiarm.types import BoolArray, FloatArray, IntArray
 from scheduler.setup import BoundSetup, NoSetup, Setup, setup_from_dict
 from scheduler.timing import Shapes
 
-__all__ = ["BlockingOracle", "Model", "Problem", "Window"]
+__all__ = [
+    "BlockingOracle",
+    "HasProblem",
+    "Model",
+    "Problem",
+    "ProblemLike",
+    "Window",
+    "as_problem",
+]
 
 WindowKind = Literal["occupy", "move"]
 
@@ -727,3 +735,37 @@ class Model:
         )
         problem._setup.check()
         return problem
+
+
+class HasProblem(Protocol):
+    """Anything that carries a :class:`Problem` as ``.problem`` (a compiled
+    cell, for example): :func:`scheduler.solve` and
+    :func:`scheduler.validate` accept it in place of the problem."""
+
+    @property
+    def problem(self) -> Problem:
+        """The scheduling problem."""
+        ...
+
+
+ProblemLike = Problem | HasProblem
+"""A :class:`Problem` or an object with a ``.problem`` Problem."""
+
+
+def as_problem(obj: ProblemLike, where: str = "problem") -> Problem:
+    """The :class:`Problem` of ``obj``: itself, or its ``.problem``.
+
+    Raises
+    ------
+    UsageError
+        Neither (the message names ``where`` and the type given).
+    """
+    if isinstance(obj, Problem):
+        return obj
+    inner = getattr(obj, "problem", None)
+    if isinstance(inner, Problem):
+        return inner
+    raise UsageError(
+        f"{where}: expected a scheduler.Problem or an object with a .problem Problem "
+        f"(such as a workcell.CompiledCell), got {type(obj).__name__}"
+    )

@@ -28,15 +28,13 @@ import bisect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 
 from multiarm.errors import ScheduleError, UsageError, ValidationError
 from multiarm.types import FloatArray, IntArray
-
-if TYPE_CHECKING:
-    from scheduler.problem import Problem
+from scheduler.problem import Problem, ProblemLike, as_problem
 
 __all__ = [
     "ROW_COLUMNS",
@@ -569,7 +567,7 @@ def blocking_required(
     return total, who
 
 
-def validate(problem: Problem, schedule: Schedule, tol: float = 1e-6) -> float:
+def validate(problem: ProblemLike, schedule: Schedule, tol: float = 1e-6) -> float:
     """Check every constraint of ``problem`` on ``schedule``; return the makespan.
 
     Checks: one mode of the right task per task; finite times; ends equal
@@ -583,6 +581,10 @@ def validate(problem: Problem, schedule: Schedule, tol: float = 1e-6) -> float:
 
     Parameters
     ----------
+    problem : Problem or object with a ``.problem`` Problem
+        A :class:`Problem`, or anything carrying one as ``.problem`` (a
+        ``workcell.CompiledCell``).
+    schedule : Schedule
     tol : float
         Absolute tolerance on times, seconds.
 
@@ -596,7 +598,7 @@ def validate(problem: Problem, schedule: Schedule, tol: float = 1e-6) -> float:
     ScheduleError
         Naming the first violated constraint, its tasks, arms and times.
     """
-    p = problem
+    p = as_problem(problem, "validate")
     T = p.n_tasks
     s = schedule
     if (

@@ -34,7 +34,7 @@ import numpy as np
 from multiarm.errors import UsageError
 from scheduler import result as _result
 from scheduler.greedy import GreedyOptions, solve_greedy
-from scheduler.problem import Problem
+from scheduler.problem import Problem, ProblemLike, as_problem
 from scheduler.result import Progress, Result, SearchStats, SolveStatus
 from scheduler.tree import TreeOptions
 
@@ -187,7 +187,7 @@ def _warm_up() -> None:
 
 
 def solve(
-    problem: Problem,
+    problem: ProblemLike,
     solver: SolverName = "tree",
     time_limit: float | None = 10.0,
     seed: int = 0,
@@ -201,7 +201,9 @@ def solve(
 
     Parameters
     ----------
-    problem : Problem
+    problem : Problem or object with a ``.problem`` Problem
+        A :class:`Problem`, or anything carrying one as ``.problem`` (a
+        ``workcell.CompiledCell``: its problem is solved).
     solver : {"tree", "greedy", "cpsat"}
         ``tree`` (default): the anytime tree search with pruning and local
         improvement; ``greedy``: the earliest-finish-time list-scheduling
@@ -235,6 +237,7 @@ def solve(
         An unknown solver or option, options of another solver, a time limit
         that is not finite and > 0, or a seed outside 0..2**31-1.
     """
+    problem = as_problem(problem, "solve")
     if time_limit is not None:
         if isinstance(time_limit, bool) or not isinstance(time_limit, int | float | np.number):
             raise UsageError(f"time_limit must be a number of seconds or None, got {time_limit!r}")

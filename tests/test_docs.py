@@ -44,7 +44,7 @@ def test_cell_file_example_in_docs_loads() -> None:
     block = re.findall(r"```toml\n(.*?)```", (DOCS / "workcell.md").read_text(), flags=re.S)[0]
     cell = cell_from_dict(tomllib.loads(block), filename="cell.toml")
     assert [a.name for a in cell.arms] == ["left", "right"]
-    assert compile_cell(cell).n_arms == 2
+    assert compile_cell(cell).problem.n_arms == 2
 
 
 @pytest.mark.parametrize(

@@ -15,4 +15,3 @@ def test_no_module_of_ours_imports_itself_back() -> None:
     graph = grimp.build_graph(*PACKAGES, exclude_type_checking_imports=False, cache_dir=None)
     # (tests/scheduler/test_no_cycles.py shows the circle finder can fail)
     assert find_cycle(graph) == []
-

@@ -3,10 +3,12 @@
 * :class:`Cell`, :func:`load_cell`, :func:`load_example`: tasks (tasklib), SDL
   zones (zones) and heterogeneous arms in one record, from a TOML cell file
   or a built-in cell (``"supersigma"``, ``"scara4"``, ``"cell8"``).
-* :func:`compile_cell`: the cell as a :class:`scheduler.Problem` (modes timed
-  with the arms' drives, zone windows from a conservative FCL sweep, travel
-  setups, the blocking oracle with OMPL detours); :func:`compile_details`
-  gives the per-mode trajectories behind it.
+* :func:`compile_cell`: the cell compiled under :class:`CompileOptions` into
+  a :class:`CompiledCell`, whose ``.problem`` is the :class:`scheduler.Problem`
+  (modes timed with the arms' drives, zone windows from a conservative FCL
+  sweep, the space grid, travel setups, the blocking oracle with OMPL
+  detours) and whose ``.modes`` are the trajectories behind it.
+  ``scheduler.solve`` and ``scheduler.validate`` accept it as it is.
 * :mod:`workcell.arms`, :mod:`workcell.geometry`: arm models and motion
   timing; the collision world, sweeps and the detour planner.
 * :mod:`workcell.cli`: the ``multiarm`` command.
@@ -15,8 +17,8 @@
 
 Examples
 --------
->>> problem = compile_cell(load_example("scara4"))
->>> problem.n_arms, problem.n_tasks
+>>> cc = compile_cell(load_example("scara4"))
+>>> cc.problem.n_arms, cc.problem.n_tasks
 (4, 20)
 >>> round(dcr_bound() * 1e6)
 604
@@ -25,11 +27,11 @@ Examples
 from workcell.cell import EXAMPLES, Cell, cell_from_dict, load_cell, load_example
 from workcell.compile import (
     CompiledCell,
-    CompiledMode,
     compile_cell,
     compile_cell_detailed,
     compile_details,
 )
+from workcell.compiled import CompiledMode, CompileOptions
 from workcell.oracle import CellOracle
 from workcell.sim.faults import (
     ActivateZones,
@@ -50,6 +52,7 @@ __all__ = [
     "ArmFailure",
     "Cell",
     "CellOracle",
+    "CompileOptions",
     "CompiledCell",
     "CompiledMode",
     "Crash",

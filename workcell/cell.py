@@ -24,7 +24,8 @@ built-in task set or zone map (``supersigma``, ``scara4``, ``cell8``)::
     padding = 0.005                    # sweep padding, metres (zone windows are conservative by it)
     park = "home"                      # after each task the arm returns to its start joints ("home"),
                                        # or stays at the task's last pose ("last")
-    separate_arms = true               # arm-pair zones: arms never meet outside the SDL zones
+    grid = 0.3                         # space-grid block side, metres (0: off): moving arms
+                                       # never meet outside the SDL zones (workcell.geometry.reach)
 
     [arms.left]                        # one table per arm; see workcell.arms.arm_from_dict
     type = "gantry"
@@ -45,6 +46,7 @@ from __future__ import annotations
 
 import math
 import tomllib
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from importlib import resources
@@ -61,6 +63,7 @@ from tasklib.examples import EXAMPLES as TASK_EXAMPLES
 from tasklib.io import load_taskset, parse_toml, read_toml_source
 from tasklib.tdl import load_tdl
 from workcell.arms import DriveArm, arm_from_dict
+from workcell.compiled import SPACE_GRID
 from zones import ZoneMap, load_sdl
 from zones import examples as zone_examples
 
@@ -105,12 +108,14 @@ class Cell:
         leaves it at the task's last pose, where it may block other arms
         (S2.6 geometric deadlock, answered by the blocking oracle) until it
         travels to its next task, and for good after its last one.
-    separate_arms : bool
-        Give every pair of arms whose reach overlaps an implicit exclusive
-        zone ``"a|b"`` (:mod:`workcell.geometry.reach`), so that two arms
-        moving at the same time can never meet outside the SDL zones. On by
-        default; off leaves arms apart only where the SDL zones and the
-        parked-arm oracle keep them.
+    grid : float
+        Block side of the space grid, metres (:mod:`workcell.geometry.reach`):
+        every block that modes of two arms touch becomes an implicit
+        exclusive zone, so that two arms moving at the same time can never
+        meet outside the SDL zones. ``0`` turns it off: arms are then kept
+        apart only where the SDL zones and the parked-arm oracle keep them.
+        Default :data:`workcell.compiled.SPACE_GRID`; a
+        :class:`~workcell.CompileOptions` ``grid`` overrides it.
     description : str
     source : str or None
         The cell file it was read from.
@@ -126,7 +131,7 @@ class Cell:
     seed: int = 0
     padding: float = 0.005
     park: Park = "home"
-    separate_arms: bool = True
+    grid: float = SPACE_GRID
     description: str = ""
     source: str | None = field(default=None, compare=False)
 
@@ -177,6 +182,17 @@ class Cell:
             raise ValidationError(
                 f"cell {self.name!r}: park must be 'home' or 'last', not {self.park!r}"
             )
+        g = self.grid
+        if (
+            isinstance(g, bool)
+            or not isinstance(g, int | float)
+            or not (math.isfinite(g) and g >= 0)
+        ):
+            raise ValidationError(
+                f"cell {self.name!r}: grid must be a finite number of metres >= 0 (0: off), "
+                f"not {g!r}"
+            )
+        object.__setattr__(self, "grid", float(g))
         if not (math.isfinite(self.padding) and 0 < self.padding <= 0.1):
             raise ValidationError(
                 f"cell {self.name!r}: padding must be in (0, 0.1] metres, got {self.padding}"
@@ -212,7 +228,7 @@ class Cell:
 # ------------------------------------------------------------------ loader
 
 _TOP_KEYS = {"name", "description", "zones", "tasks", "tdl", "compile", "arms"}
-_COMPILE_KEYS = {"plan_with", "releases", "seed", "padding", "park", "separate_arms"}
+_COMPILE_KEYS = {"plan_with", "releases", "seed", "padding", "park", "grid", "separate_arms"}
 
 
 def _fail(where: str, message: str) -> ValidationError:
@@ -341,9 +357,31 @@ def cell_from_dict(
     park = comp.get("park", "home")
     if park not in ("home", "last"):
         raise _fail(f"{top}: compile.park", f"expected 'home' or 'last', got {park!r}")
-    separate = comp.get("separate_arms", True)
-    if not isinstance(separate, bool):
-        raise _fail(f"{top}: compile.separate_arms", f"expected true or false, got {separate!r}")
+    grid = comp.get("grid", SPACE_GRID)
+    if isinstance(grid, bool) or not isinstance(grid, int | float):
+        raise _fail(f"{top}: compile.grid", f"expected a number of metres, got {grid!r}")
+    if not (math.isfinite(grid) and grid >= 0):
+        raise _fail(f"{top}: compile.grid", f"must be >= 0 metres (0: off), got {grid!r}")
+    if "separate_arms" in comp:
+        # the former switch: false is grid = 0, true the grid as set
+        separate = comp["separate_arms"]
+        if not isinstance(separate, bool):
+            raise _fail(
+                f"{top}: compile.separate_arms", f"expected true or false, got {separate!r}"
+            )
+        if not separate and "grid" in comp and grid > 0:
+            raise _fail(
+                f"{top}: compile.separate_arms",
+                f"false contradicts grid = {grid!r} (write grid = 0 alone)",
+            )
+        warnings.warn(
+            f"{top}: compile.separate_arms is deprecated: write grid = 0 (off) or a block "
+            "side in metres",
+            DeprecationWarning,
+            stacklevel=3,
+        )
+        if not separate:
+            grid = 0.0
     arms_data = data.get("arms")
     if not isinstance(arms_data, Mapping) or not arms_data:
         raise _fail(f"{top}: arms", "expected a table with at least one [arms.NAME] table")
@@ -385,7 +423,7 @@ def cell_from_dict(
             seed=seed,
             padding=float(padding),
             park=park,
-            separate_arms=separate,
+            grid=float(grid),
             description=description,
             source=filename,
         )

@@ -217,7 +217,7 @@ def explain_cell(cell: Cell) -> CellReport:
     Never raises for a cell that does not compile: the compile's error is
     the report's ``error``.
     """
-    from workcell.compile import compile_cell_detailed
+    from workcell.compile import compile_cell
 
     warnings = _static_warnings(cell)
     zm = cell.zone_map
@@ -238,7 +238,7 @@ def explain_cell(cell: Cell) -> CellReport:
     )
     n_tasks = len(cell.taskset.tasks)
     try:
-        cc = compile_cell_detailed(cell)
+        cc = compile_cell(cell)
     except MultiarmError as exc:
         zones = tuple(ZoneReport(z.name, z.policy, (), ()) for z in zm.zones)
         return CellReport(cell.name, (), zones, tools, tuple(warnings), str(exc), n_tasks, 0)

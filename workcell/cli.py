@@ -284,13 +284,13 @@ def _load_schedulable(name: str) -> Any:
     if not path.exists() and name in EXAMPLES:
         from workcell import compile_cell
 
-        return compile_cell(load_example(name))
+        return compile_cell(load_example(name)).problem
     if path.suffix.lower() == ".fjs" or (path.is_file() and detect_format(path) == "fjsp"):
         return read_fjsp(path)
     if path.suffix.lower() == ".toml":
         from workcell import compile_cell, load_cell
 
-        return compile_cell(load_cell(path))
+        return compile_cell(load_cell(path)).problem
     return load_problem(path)
 
 
@@ -462,11 +462,11 @@ def _load_faults(name: str) -> Any:
 
 
 def _compile_with_bar(cell: Any) -> Any:
-    from workcell.compile import compile_cell_detailed
+    from workcell.compile import compile_cell
 
     bar = _progress(len(cell.taskset.tasks), f"{cell.name}: compile")
     try:
-        return compile_cell_detailed(cell, progress=lambda done, _total: bar.update(1))
+        return compile_cell(cell, progress=lambda done, _total: bar.update(1))
     finally:
         bar.close()
 

@@ -33,26 +33,34 @@ start zones from the arms' initial poses; sequence-dependent travel times
 a row at a time on demand and cached); and a blocking oracle
 (:class:`workcell.oracle.CellOracle`) for arms parked in another's way.
 
+The settings are one :class:`~workcell.compiled.CompileOptions` record; the
+result is one frozen :class:`CompiledCell` (the problem, the modes'
+trajectories, the rejected pairs, the oracle and the options applied).
+Nothing is kept anywhere else: keep the CompiledCell.
+
 Examples
 --------
 >>> from workcell.cell import load_example
->>> problem = compile_cell(load_example("supersigma"))
->>> problem.n_arms, problem.n_tasks
+>>> cc = compile_cell(load_example("supersigma"))
+>>> cc.problem.n_arms, cc.problem.n_tasks
 (2, 10)
+>>> cc.options.grid  # the space grid's block side used, metres (0: off)
+0.3
 """
 
 from __future__ import annotations
 
 import math
 import time
-import weakref
-from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+from types import MappingProxyType
 from typing import Any, Literal
 
 import numpy as np
 
-from multiarm.errors import NoFeasibleSchedule, Unreachable, ValidationError
+from multiarm.errors import NoFeasibleSchedule, Unreachable, UsageError, ValidationError
 from multiarm.types import FloatArray, JointVector
 from scheduler import MatrixSetup, Model, Problem, Setup, Window
 from scheduler.setup import BoundSetup
@@ -61,6 +69,7 @@ from tasklib.model import Task
 from workcell.arms import DriveArm, JointTrajectory, Segment
 from workcell.arms.trajectory import Interpolation, move_segment
 from workcell.cell import Cell
+from workcell.compiled import CompiledMode, CompileOptions
 from workcell.geometry import sample_trajectory, static_occupancy, zone_contacts, zone_windows
 from workcell.geometry.reach import (
     arm_capsules,
@@ -72,6 +81,7 @@ from workcell.oracle import CellOracle
 from workcell.program import Program, expand_task
 
 __all__ = [
+    "CompileOptions",
     "CompiledCell",
     "CompiledMode",
     "JointTravelSetup",
@@ -80,56 +90,14 @@ __all__ = [
     "compile_details",
 ]
 
-SPACE_GRID = 0.3
-"""Block side (metres) of the space-grid zones that keep arms apart
-(:mod:`workcell.geometry.reach`): coarser blocks give fewer zones and a faster
-search but keep apart more pairs of modes than needed (S2.12)."""
 
-GRID_PADDING = 0.02
-"""Sweep padding (metres) against the space-grid blocks, when the cell's own
-padding is finer: fewer samples, windows conservative by this much."""
-
-LINEAR_STEP = 0.02
-"""Longest Cartesian step (metres) between inverse-kinematics solutions on a
-straight-line move: the joint path between them is interpolated in joint
-space, so the tool leaves the line by a small fraction of this."""
-
-
-@dataclass(frozen=True, slots=True)
-class CompiledMode:
-    """One (task, arm) mode with everything the simulator needs to execute it.
-
-    Attributes
-    ----------
-    task, arm : str
-    trajectory : JointTrajectory
-        The timed joint path, from the task's start.
-    q_start, q_end : (dof,) float
-        Joint vectors at the task's start and end.
-    windows : tuple of scheduler.Window
-    tools : tuple of str
-    flags_set, flags_waited : tuple of (flag, offset seconds)
-    """
-
-    task: str
-    arm: str
-    trajectory: JointTrajectory
-    q_start: JointVector
-    q_end: JointVector
-    windows: tuple[Window, ...]
-    tools: tuple[str, ...]
-    flags_set: tuple[tuple[str, float], ...] = ()
-    flags_waited: tuple[tuple[str, float], ...] = ()
-
-    @property
-    def duration(self) -> float:
-        """Seconds from the task's start to its end."""
-        return float(self.trajectory.duration)
-
-
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class CompiledCell:
     """A compiled cell: the problem plus the per-mode detail behind it.
+
+    ``scheduler.solve`` and ``scheduler.validate`` accept it in place of its
+    :attr:`problem`; ``workcell.simulate`` and the plots need it (a bare
+    Problem does not carry the trajectories).
 
     Attributes
     ----------
@@ -137,8 +105,14 @@ class CompiledCell:
     problem : scheduler.Problem
     modes : tuple of CompiledMode
         Indexed like ``problem``'s modes.
-    rejected : dict of (task, arm) -> str
-        Why an arm has no mode for a task.
+    rejected : mapping of (task, arm) -> str
+        Why an arm has no mode for a task (read-only).
+    oracle : CellOracle
+        The blocking oracle (also ``problem.blocking``).
+    options : CompileOptions
+        The options applied, with the cell's own choices filled in
+        (``grid`` is the block side used, 0 when the grid was off;
+        ``plan_with`` is set).
     seconds : float
         Wall time of the compile.
     """
@@ -146,7 +120,9 @@ class CompiledCell:
     cell: Cell
     problem: Problem
     modes: tuple[CompiledMode, ...]
-    rejected: dict[tuple[str, str], str] = field(default_factory=dict)
+    rejected: Mapping[tuple[str, str], str]
+    oracle: CellOracle
+    options: CompileOptions
     seconds: float = 0.0
 
     def mode(self, task: str, arm: str) -> CompiledMode:
@@ -163,17 +139,30 @@ class CompiledCell:
         return self.modes[m]
 
 
-_DETAILS: weakref.WeakKeyDictionary[Problem, CompiledCell] = weakref.WeakKeyDictionary()
+def compile_details(problem: object) -> CompiledCell:
+    """Deprecated: keep the :class:`CompiledCell` that :func:`compile_cell` returns.
 
+    Given a CompiledCell, returns it; given a Problem, raises: no registry of
+    compiled problems is kept.
 
-def compile_details(problem: Problem) -> CompiledCell:
-    """The :class:`CompiledCell` behind a problem made by :func:`compile_cell`."""
-    try:
-        return _DETAILS[problem]
-    except KeyError:
-        raise ValidationError(
-            f"problem {problem.name!r} was not made by workcell.compile_cell"
-        ) from None
+    Raises
+    ------
+    UsageError
+        Anything but a CompiledCell.
+    """
+    warnings.warn(
+        "workcell.compile_details is deprecated: workcell.compile_cell returns the "
+        "CompiledCell; keep it",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    if isinstance(problem, CompiledCell):
+        return problem
+    name = getattr(problem, "name", type(problem).__name__)
+    raise UsageError(
+        f"compile_details({name!r}): no registry of compiled problems is kept; keep the "
+        "CompiledCell that workcell.compile_cell returns (its .problem is the Problem)"
+    )
 
 
 # ------------------------------------------------------------ one mode
@@ -188,11 +177,11 @@ def _lacks(task: Task, arm: DriveArm) -> str | None:
     return None
 
 
-def _line(a: FloatArray, b: FloatArray) -> list[FloatArray]:
+def _line(a: FloatArray, b: FloatArray, step: float) -> list[FloatArray]:
     """Poses along the straight line from ``a`` to ``b`` (excluded, included),
-    orientation of ``b``, at most :data:`LINEAR_STEP` apart."""
+    orientation of ``b``, at most ``step`` metres apart."""
     dist = float(np.linalg.norm(b[:3, 3] - a[:3, 3]))
-    n = max(1, int(np.ceil(dist / LINEAR_STEP)))
+    n = max(1, int(np.ceil(dist / step)))
     out = []
     for k in range(1, n + 1):
         t = b.copy()
@@ -207,6 +196,7 @@ def _mode(
     q0: JointVector,
     park: JointVector | None = None,
     approach_from: JointVector | None = None,
+    step: float = 0.02,
 ) -> tuple[JointTrajectory, list[float], JointVector]:
     """Time ``program`` on ``arm`` from joint vector ``q0`` (then back to
     ``park`` if given); with ``approach_from``, the trajectory starts there
@@ -236,7 +226,7 @@ def _mode(
         target = seg.target
         if target is None:  # pragma: no cover - a move always has a target
             continue
-        poses = _line(pose, target) if seg.interpolation == "linear" else [target]
+        poses = _line(pose, target, step) if seg.interpolation == "linear" else [target]
         interp: Interpolation = "sync" if seg.interpolation == "linear" else arm.interpolation
         for p in poses:
             try:
@@ -279,35 +269,58 @@ def _releases(cell: Cell) -> dict[str, float]:
     return out
 
 
+def _resolve(cell: Cell, options: CompileOptions | None = None) -> CompileOptions:
+    """``options`` (default :class:`CompileOptions`) with the cell's own
+    choices filled in where a field is None: the grid block side from
+    ``cell.grid`` (0 when off or with fewer than two arms) and ``plan_with``."""
+    if options is None:
+        options = CompileOptions()
+    elif not isinstance(options, CompileOptions):
+        raise UsageError(
+            f"compile_cell: options must be a workcell.CompileOptions, got {type(options).__name__}"
+        )
+    grid = cell.grid if options.grid is None else float(options.grid)
+    if len(cell.arms) < 2:
+        grid = 0.0
+    return replace(options, grid=float(grid), plan_with=options.plan_with or cell.plan_with)
+
+
 def compile_cell(
     cell: Cell,
     *,
-    plan_with: Literal["nominal", "worst"] | None = None,
+    options: CompileOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
-) -> Problem:
-    """Compile ``cell`` into a :class:`scheduler.Problem` (module docstring).
+) -> CompiledCell:
+    """Compile ``cell`` into a :class:`CompiledCell` (module docstring).
 
     Parameters
     ----------
     cell : Cell
-    plan_with : {"nominal", "worst"}, optional
-        Overrides the cell's own choice.
+    options : CompileOptions, optional
+        Defaults: the cell's own choices (its ``[compile]`` table) and the
+        module defaults.
     progress : callable, optional
-        Called as ``progress(done, total)`` after each task.
+        Called as ``progress(done, total)`` after each task (kept out of the
+        options, which are plain values).
 
     Returns
     -------
-    scheduler.Problem
-        With a :class:`JointTravelSetup` of travel times and the
-        cell's blocking oracle; :func:`compile_details` gives the modes'
-        trajectories.
+    CompiledCell
+        ``.problem`` is the :class:`scheduler.Problem`, with a
+        :class:`JointTravelSetup` of travel times and the cell's blocking
+        oracle; ``.modes`` the modes' trajectories.
 
     Raises
     ------
     NoFeasibleSchedule
         A task no arm can do: the message names it and why each arm failed.
+    UsageError
+        ``options`` is not a CompileOptions.
     """
-    return compile_cell_detailed(cell, plan_with=plan_with, progress=progress).problem
+    if not isinstance(cell, Cell):
+        raise UsageError(f"compile_cell: expected a workcell.Cell, got {type(cell).__name__}")
+    opts = _resolve(cell, options)
+    return _compile(cell, opts, progress)
 
 
 def compile_cell_detailed(
@@ -316,9 +329,21 @@ def compile_cell_detailed(
     plan_with: Literal["nominal", "worst"] | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> CompiledCell:
-    """Like :func:`compile_cell`, returning the :class:`CompiledCell`."""
+    """Deprecated alias: ``compile_cell(cell, options=CompileOptions(plan_with=...))``."""
+    warnings.warn(
+        "workcell.compile_cell_detailed is deprecated: workcell.compile_cell returns the "
+        "CompiledCell (plan_with is a CompileOptions field)",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    return compile_cell(cell, options=CompileOptions(plan_with=plan_with), progress=progress)
+
+
+def _compile(
+    cell: Cell, opts: CompileOptions, progress: Callable[[int, int], None] | None
+) -> CompiledCell:
     t0 = time.perf_counter()
-    plan = plan_with or cell.plan_with
+    plan = opts.plan_with or cell.plan_with
     ts = cell.taskset
     zm = cell.zone_map
     shared = ~zm.exclusive_mask()
@@ -341,7 +366,9 @@ def compile_cell_detailed(
             why = _lacks(task, arm)
             if why is None:
                 try:
-                    cm = _compile_mode(task, program, arm, q0, cell, shared, active)
+                    cm = _compile_mode(
+                        task, program, arm, q0, cell, shared, active, opts.linear_step
+                    )
                 except Unreachable as exc:
                     why = str(exc)
                 else:
@@ -355,9 +382,16 @@ def compile_cell_detailed(
             )
         if progress is not None:
             progress(ti + 1, len(ts.tasks))
-    modes, pair_zones = _pair_windows(cell, modes)
+    modes, pair_zones = _pair_windows(cell, modes, float(opts.grid or 0.0), opts.grid_padding)
     m = _model(cell, releases, group_of, preds, tool_names, active, modes, pair_zones)
-    oracle = CellOracle(cell)
+    oracle = CellOracle(
+        cell,
+        budget=opts.detour_budget,
+        max_checks=opts.detour_max_checks,
+        seed=opts.detour_seed,
+        grid=opts.contact_padding,
+        detours=opts.detours,
+    )
     problem, ordered = _build(m, cell, modes, oracle)
     if cell.park == "home":
         # Every arm rests at its start joints between tasks: a mode that would
@@ -386,9 +420,15 @@ def compile_cell_detailed(
                     )
             m = _model(cell, releases, group_of, preds, tool_names, active, modes, pair_zones)
             problem, ordered = _build(m, cell, modes, oracle)
-    out = CompiledCell(cell, problem, ordered, rejected, time.perf_counter() - t0)
-    _DETAILS[problem] = out
-    return out
+    return CompiledCell(
+        cell,
+        problem,
+        ordered,
+        MappingProxyType(rejected),
+        oracle,
+        opts,
+        time.perf_counter() - t0,
+    )
 
 
 def _model(
@@ -423,21 +463,24 @@ def _model(
 
 
 def _pair_windows(
-    cell: Cell, modes: list[tuple[tuple[int, int], CompiledMode]]
+    cell: Cell,
+    modes: list[tuple[tuple[int, int], CompiledMode]],
+    grid: float,
+    grid_padding: float,
 ) -> tuple[list[tuple[tuple[int, int], CompiledMode]], tuple[str, ...]]:
     """Add the space-grid zones' windows to the modes (:mod:`workcell.geometry.reach`).
 
     The space two or more arms can reach is cut into blocks of
-    :data:`SPACE_GRID` metres; every block that modes of two or more arms
+    ``grid`` metres (0: no grid); every block that modes of two or more arms
     touch becomes an exclusive zone, with each mode's occupancy windows from
     the zone sweep. Two arms can then never be where they could meet at the
     same time. Returns the modes with their new windows and the zones used.
     """
-    if not cell.separate_arms or len(cell.arms) < 2:
+    if grid <= 0 or len(cell.arms) < 2:
         return modes, ()
     # The blocks are coarse, so the sweep against them samples more coarsely
     # too: the guarantee holds for any padding (windows grow by it).
-    pad = max(cell.padding, GRID_PADDING)
+    pad = max(cell.padding, grid_padding)
     samples: list[tuple[FloatArray, FloatArray]] = []
     boxes: list[list[FloatArray]] = [[] for _ in cell.arms]
     for (_t, a), cm in modes:
@@ -450,7 +493,7 @@ def _pair_windows(
     reach = [
         np.stack([np.min([b[0] for b in bs], 0), np.max([b[1] for b in bs], 0)]) for bs in boxes
     ]
-    blocks = shared_blocks(reach, SPACE_GRID)
+    blocks = shared_blocks(reach, grid)
     if blocks.n_zones == 0:
         return modes, ()
     names = blocks.zone_names()
@@ -498,6 +541,7 @@ def _compile_mode(
     cell: Cell,
     shared: Any,
     active: Any,
+    step: float,
 ) -> CompiledMode:
     # With park="last" the task starts at its first pose and the travel there
     # is the setup. With park="home" the task is the whole round trip from
@@ -506,7 +550,7 @@ def _compile_mode(
     first = next((s.target for s in program.segments if s.target is not None), None)
     q_first = arm.ik(first, q0) if first is not None else np.asarray(q0, dtype=float)
     home = np.asarray(q0, dtype=float) if cell.park == "home" else None
-    traj, offsets, q_end = _mode(program, arm, q_first, home, approach_from=home)
+    traj, offsets, q_end = _mode(program, arm, q_first, home, approach_from=home, step=step)
     if home is not None:
         q_first = home
     zw = zone_windows(arm, traj, cell.zone_map, padding=cell.padding)

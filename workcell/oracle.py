@@ -22,7 +22,9 @@ The scheduler asks :meth:`CellOracle.cost` "does mode ``m`` collide with arm
    parked arm: a start or goal in collision) or a search that finds nothing
    means no detour: ``inf``. Otherwise the cost is the detours' extra time over the
    segments they replace (at least :data:`MIN_COST`, so a contact is never
-   free).
+   free). With detours off (``detours=False``, the compile option
+   :attr:`workcell.CompileOptions.detours`) every contact costs ``inf``
+   without planning: the scheduler then waits the parked arm out.
 
 Answers are cached per (mode, parked arm, pose task) and the detour paths
 are kept for the simulation (:meth:`CellOracle.detours`). The planner runs
@@ -36,13 +38,15 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from multiarm.errors import UsageError
 from multiarm.types import FloatArray, JointVector
+from scheduler import Problem
 from workcell.arms import DriveArm, time_path
+from workcell.cell import Cell
+from workcell.compiled import CompiledMode
 from workcell.geometry import (
     DetourPlanner,
     ObstacleSet,
@@ -51,11 +55,6 @@ from workcell.geometry import (
     plan_detour,
     sample_trajectory,
 )
-
-if TYPE_CHECKING:
-    from scheduler import Problem
-    from workcell.cell import Cell
-    from workcell.compile import CompiledMode
 
 __all__ = ["MIN_COST", "CellOracle", "Detour", "OracleStats"]
 
@@ -121,6 +120,8 @@ class CellOracle:
         cell's padding). S2.12's compromise: a coarser grid answers faster
         but rejects some paths that are possible in reality (near misses
         within ``grid`` count as contacts).
+    detours : bool
+        Plan detours around a parked arm; ``False``: a contact costs ``inf``.
     """
 
     def __init__(
@@ -131,8 +132,10 @@ class CellOracle:
         max_checks: int = 2_000,
         seed: int = 0,
         grid: float = 0.02,
+        detours: bool = True,
     ) -> None:
         self.cell = cell
+        self.plan_detours = bool(detours)
         self.budget = float(budget)
         self.max_checks = int(max_checks)
         self.seed = int(seed)
@@ -331,6 +334,9 @@ class CellOracle:
         if not bad.any():
             self.stats.checked_free += 1
             return 0.0
+        if not self.plan_detours:
+            self.stats.infeasible += 1
+            return math.inf
         runs = _runs(t[bad], knots)
         total = 0.0
         found: list[Detour] = []

@@ -14,9 +14,8 @@ from multiarm.errors import FormatError, NoFeasibleSchedule, ValidationError
 from scheduler import solve, validate
 from workcell import (
     CompiledCell,
+    CompileOptions,
     compile_cell,
-    compile_cell_detailed,
-    compile_details,
     load_cell,
     load_example,
 )
@@ -27,12 +26,12 @@ EXAMPLE_DIR = Path(__file__).resolve().parents[2] / "workcell" / "examples"
 
 @pytest.fixture(scope="module")
 def supersigma() -> CompiledCell:
-    return compile_cell_detailed(load_example("supersigma"))
+    return compile_cell(load_example("supersigma"))
 
 
 @pytest.fixture(scope="module")
 def scara4() -> CompiledCell:
-    return compile_cell_detailed(load_example("scara4"))
+    return compile_cell(load_example("scara4"))
 
 
 # ------------------------------------------------------------------ loading
@@ -182,7 +181,9 @@ def test_scara4_carries_part_groups_and_zone_windows(scara4: CompiledCell) -> No
 
 def test_mode_details_match_the_problem(scara4: CompiledCell) -> None:
     p = scara4.problem
-    assert compile_details(p) is scara4
+    assert scara4.oracle is p.blocking and scara4.options == CompileOptions(
+        grid=0.3, plan_with="nominal"
+    )
     for m, cm in enumerate(scara4.modes):
         assert cm.task == p.task_names[p.mode_task[m]] and cm.arm == p.arm_names[p.mode_arm[m]]
         assert cm.duration == pytest.approx(p.mode_duration[m])
@@ -209,7 +210,7 @@ def test_travel_setups_are_the_arms_move_times(scara4: CompiledCell) -> None:
 
 
 def test_worst_case_plans_longer_insertions(supersigma: CompiledCell) -> None:
-    worst = compile_cell(supersigma.cell, plan_with="worst")
+    worst = compile_cell(supersigma.cell, options=CompileOptions(plan_with="worst")).problem
     p = supersigma.problem
     t = p.task_names.index("insert_pin")
     for m_n, m_w in zip(p.task_modes[t], worst.task_modes[t], strict=True):
@@ -217,7 +218,7 @@ def test_worst_case_plans_longer_insertions(supersigma: CompiledCell) -> None:
 
 
 def test_compiling_twice_gives_the_same_problem(scara4: CompiledCell) -> None:
-    again = compile_cell(scara4.cell)
+    again = compile_cell(scara4.cell).problem
     assert again.to_dict() == scara4.problem.to_dict()
 
 
@@ -230,11 +231,12 @@ def test_a_task_no_arm_can_do_names_it_and_every_reason(tmp_path: Path) -> None:
 @pytest.mark.parametrize("solver", ["greedy", "tree"])
 @pytest.mark.parametrize("name", ["supersigma", "scara4"])
 def test_every_solver_schedule_of_a_builtin_cell_validates(name: str, solver: str) -> None:
-    p = compile_cell(load_example(name))
+    cc = compile_cell(load_example(name))
+    p = cc.problem
     limits = {} if solver == "greedy" else {"max_evaluations": 300}
-    r = solve(p, solver, time_limit=None if solver == "greedy" else 30.0, seed=0, **limits)
+    r = solve(cc, solver, time_limit=None if solver == "greedy" else 30.0, seed=0, **limits)
     assert r.schedule is not None
-    assert validate(p, r.schedule) == pytest.approx(r.objective)
+    assert validate(cc, r.schedule) == pytest.approx(r.objective) == validate(p, r.schedule)
 
 
 def test_cpsat_schedule_of_scara4_validates_when_found(scara4: CompiledCell) -> None:
@@ -252,7 +254,7 @@ def test_oracle_detours_are_collision_free_and_cost_their_extra_time() -> None:
     cell = load_example("scara4")
     from dataclasses import replace
 
-    cc = compile_cell_detailed(replace(cell, park="last"))
+    cc = compile_cell(replace(cell, park="last"))
     p, o = cc.problem, cc.problem.blocking
     assert o is not None
     found = None
@@ -307,8 +309,8 @@ def test_the_readme_c_style_example_compiles_in_a_cell_of_gantries_and_scaras() 
     base = [0.9, 0.5, 0.0, math.pi]
     scara = arm_from_dict("s", {"type": "scara", "base": base, "capabilities": caps}, "s")
     for arms in ((gantry,), (scara,)):
-        cell = Cell("readme", taskset, zone_map, arms, separate_arms=False)
-        cc = compile_cell_detailed(cell)
+        cell = Cell("readme", taskset, zone_map, arms, grid=0.0)
+        cc = compile_cell(cell)
         assert {cc.problem.arm_names[int(a)] for a in cc.problem.mode_arm} == {
             a.name for a in arms
         }, cc.rejected

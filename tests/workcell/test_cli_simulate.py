@@ -104,7 +104,7 @@ def no_compile(monkeypatch: pytest.MonkeyPatch) -> None:
     def refuse(*_args: object, **_kw: object) -> None:
         raise AssertionError("compiled before checking the arguments")
 
-    monkeypatch.setattr(workcell.compile, "compile_cell_detailed", refuse)
+    monkeypatch.setattr(workcell.compile, "compile_cell", refuse)
 
 
 def _bad(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:

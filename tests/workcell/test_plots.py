@@ -12,9 +12,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from multiarm.errors import ValidationError
+from multiarm.errors import UsageError, ValidationError
 from scheduler import Schedule, solve
-from workcell import CompiledCell, compile_cell_detailed, load_example, simulate
+from workcell import CompiledCell, compile_cell, load_example, simulate
 from workcell.sim.trace import Trace
 from workcell.viz import (
     arm_colours,
@@ -31,7 +31,7 @@ from workcell.viz.plots import PLANNED_SHADE
 @pytest.fixture(scope="module")
 def compiled() -> CompiledCell:
     """The one place that compiles (the compile's entry point may be renamed)."""
-    return compile_cell_detailed(load_example("supersigma"))
+    return compile_cell(load_example("supersigma"))
 
 
 @pytest.fixture(scope="module")
@@ -200,8 +200,8 @@ def test_render_instants_one_panel_per_time(planned: tuple[CompiledCell, Schedul
             == shapes
         )
     assert plt.get_fignums() == before  # nothing left in pyplot's registry
-    with pytest.raises(ValidationError, match="needs the CompiledCell"):
-        render_instants(cc.cell, s, [0.0])
+    with pytest.raises(UsageError, match="needs the CompiledCell"):
+        render_instants(cc.cell, s, [0.0])  # type: ignore[arg-type]
     with pytest.raises(ValidationError, match="view must be"):
         render_instants(cc, s, [0.0], view="side")  # type: ignore[arg-type]
     with pytest.raises(ValidationError, match="at least one time"):
@@ -273,8 +273,8 @@ def test_a_run_with_a_failed_task_is_drawn_from_its_tasks(
     cm = cc.modes[int(s.mode[failed])]
     assert np.allclose(q_plan, cm.trajectory.sample(np.array([mid - float(s.start[failed])]))[0])
     assert not np.allclose(q_run, q_plan)
-    # a plain Cell works with a run (its problem leads to the compiled modes)
-    panel = render_instants(cc.cell, run, [mid])
+    # a run is drawn with the CompiledCell's trajectories
+    panel = render_instants(cc, run, [mid])
     assert len(panel.axes) == 1
 
 

@@ -15,14 +15,14 @@ import pytest
 
 from multiarm.errors import ValidationError
 from scheduler import solve
-from workcell import compile_cell_detailed, load_example, simulate
+from workcell import compile_cell, load_example, simulate
 from workcell.geometry.reach import block_name, shared_blocks
 from workcell.sim.monitor import SafetyViolation
 
 
 @pytest.mark.parametrize("name", ["supersigma", "scara4"])
 def test_plans_with_the_space_grid_never_collide(name: str) -> None:
-    cc = compile_cell_detailed(load_example(name))
+    cc = compile_cell(load_example(name))
     assert any(z.startswith("grid_") for z in cc.problem.zone_names)
     plan = solve(cc.problem, "greedy", seed=0).schedule
     run = simulate(cc, plan, seed=0, _geometry=False)  # the monitor is on
@@ -31,8 +31,8 @@ def test_plans_with_the_space_grid_never_collide(name: str) -> None:
 
 @pytest.mark.parametrize("name", ["supersigma", "scara4"])
 def test_without_the_space_grid_the_same_cells_collide(name: str) -> None:
-    cell = dataclasses.replace(load_example(name), separate_arms=False)
-    cc = compile_cell_detailed(cell)
+    cell = dataclasses.replace(load_example(name), grid=0.0)
+    cc = compile_cell(cell)
     assert not any(z.startswith("grid_") for z in cc.problem.zone_names)
     plan = solve(cc.problem, "greedy", seed=0).schedule
     with pytest.raises(SafetyViolation, match="collide"):

@@ -47,9 +47,11 @@ def build_problem(instance: InstanceSpec) -> Problem:
             p.pop("arms"), p.pop("tasks"), p.pop("zones"), p.pop("tools"), seed=instance.seed, **p
         )
     if instance.source in EXAMPLES:
-        return compile_cell(load_example(instance.source))
+        return compile_cell(load_example(instance.source)).problem
     path = Path(instance.source)
-    return compile_cell(load_cell(path if path.is_absolute() else Path(instance.base_dir) / path))
+    return compile_cell(
+        load_cell(path if path.is_absolute() else Path(instance.base_dir) / path)
+    ).problem
 
 
 def _import_path(path: str) -> None:

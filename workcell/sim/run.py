@@ -9,9 +9,9 @@ controller per arm (:mod:`workcell.sim.controller`), the faults
 
 Examples
 --------
->>> from workcell import load_example, compile_cell_detailed
+>>> from workcell import load_example, compile_cell
 >>> from scheduler import solve
->>> cc = compile_cell_detailed(load_example("supersigma"))
+>>> cc = compile_cell(load_example("supersigma"))
 >>> plan = solve(cc.problem, "greedy", seed=0).schedule
 >>> result = simulate(cc, plan)
 >>> set(result.tasks_frame()["status"])
@@ -36,7 +36,7 @@ from multiarm.types import FloatArray
 from scheduler import Problem, Schedule, validate
 from workcell.arms.profiles import StepperDrive
 from workcell.cell import Cell
-from workcell.compile import CompiledCell, compile_cell_detailed, compile_details
+from workcell.compile import CompiledCell, compile_cell
 from workcell.sim.controller import ArmController, Ticker
 from workcell.sim.coordinator import FAR, Coordinator, Network
 from workcell.sim.faults import (
@@ -235,9 +235,12 @@ def _compiled(cell: Cell | CompiledCell | Problem) -> CompiledCell:
     if isinstance(cell, CompiledCell):
         return cell
     if isinstance(cell, Cell):
-        return compile_cell_detailed(cell)
+        return compile_cell(cell)
     if isinstance(cell, Problem):
-        return compile_details(cell)
+        raise UsageError(
+            f"simulate: got the bare Problem {cell.name!r}; pass the CompiledCell that "
+            "workcell.compile_cell returned (it carries the trajectories)"
+        )
     raise UsageError(f"simulate: cell must be a Cell or a CompiledCell, got {type(cell).__name__}")
 
 
@@ -302,7 +305,7 @@ def simulate(
     Parameters
     ----------
     cell : Cell or CompiledCell
-        A Cell is compiled first (:func:`workcell.compile_cell_detailed`).
+        A Cell is compiled first (:func:`workcell.compile_cell`).
     schedule : scheduler.Schedule
         A schedule of the cell's problem (checked with :func:`scheduler.validate`).
     seed : int

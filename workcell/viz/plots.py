@@ -60,7 +60,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from multiarm.errors import ValidationError
+from multiarm.errors import UsageError, ValidationError
 from multiarm.types import FloatArray
 from scheduler.schedule import Reservation, Schedule
 from workcell.viz.style import FAULT_MARKS, arm_colours, arm_order, fault_kind
@@ -717,20 +717,14 @@ def zone_timeline(
 
 
 def _compiled(cell_or_compiled: Any, plan: Any) -> CompiledCell:
-    from workcell.compile import CompiledCell, compile_details
+    from workcell.compile import CompiledCell
 
     if isinstance(cell_or_compiled, CompiledCell):
         return cell_or_compiled
-    problem = getattr(plan, "problem", None)
-    if problem is None:
-        raise ValidationError(
-            "drawing a Schedule needs the CompiledCell (workcell.compile_cell_detailed) "
-            "for its trajectories, not a Cell"
-        )
-    cc = compile_details(problem)
-    if cc.cell is not cell_or_compiled:
-        raise ValidationError(f"the run is of cell {cc.cell.name!r}, not of the cell given")
-    return cc
+    raise UsageError(
+        "drawing the arms needs the CompiledCell that workcell.compile_cell returned "
+        f"(its trajectories), not a {type(cell_or_compiled).__name__}"
+    )
 
 
 def _rows(cc: CompiledCell, plan: Any) -> list[tuple[int, int, float, float, FloatArray]]:
@@ -775,7 +769,7 @@ def arm_joints(
     Parameters
     ----------
     compiled : CompiledCell
-        From :func:`workcell.compile_cell_detailed` (its modes' trajectories).
+        From :func:`workcell.compile_cell` (its modes' trajectories).
     plan : scheduler.Schedule or simulation result
         A schedule of ``compiled.problem``; or a run, whose executed schedule
         is used (or, when some task failed, its completed tasks without their
@@ -987,7 +981,7 @@ def _union(boxes: Sequence[tuple[FloatArray, FloatArray]]) -> tuple[FloatArray, 
 
 
 def render_instants(
-    cell_or_compiled: Cell | CompiledCell,
+    cell_or_compiled: CompiledCell,
     result_or_schedule: Any,
     times: Sequence[float] | FloatArray,
     *,
@@ -998,10 +992,9 @@ def render_instants(
 
     Parameters
     ----------
-    cell_or_compiled : Cell or CompiledCell
-        A plain :class:`~workcell.Cell` only with a simulation result (its
-        problem leads to the compiled modes); a Schedule needs the
-        :class:`~workcell.CompiledCell`.
+    cell_or_compiled : CompiledCell
+        From :func:`workcell.compile_cell` (its modes' trajectories); a
+        plain Cell or Problem raises :class:`~multiarm.errors.UsageError`.
     result_or_schedule : simulation result or scheduler.Schedule
     times : sequence of float, seconds
     view : {"top", "3d"}
@@ -1050,7 +1043,7 @@ def render_instants(
 
 
 def motion_frames(
-    cell_or_compiled: Cell | CompiledCell,
+    cell_or_compiled: CompiledCell,
     result_or_schedule: Any,
     directory: str | PathLike[str],
     *,

@@ -59,7 +59,7 @@ def grid_block(name: str) -> tuple[int, int, int] | None:
 
 def _grid_size(size: float | None) -> float:
     if size is None:
-        from workcell.compile import SPACE_GRID
+        from workcell.compiled import SPACE_GRID
 
         return float(SPACE_GRID)
     if not (math.isfinite(size) and size > 0):
@@ -75,7 +75,7 @@ def block_bounds(name: str, size: float | None = None) -> tuple[Point, Point]:
     name : str
         ``grid_X_Y_Z``.
     size : float, optional
-        Block side, metres (default :data:`workcell.compile.SPACE_GRID`,
+        Block side, metres (default :data:`workcell.compiled.SPACE_GRID`,
         the compile's; the grid is aligned with the origin).
 
     Raises
@@ -129,6 +129,11 @@ def space_grid_table(source: Any, result: Any = None, *, size: float | None = No
     """
     import pandas as pd
 
+    if size is None:  # the grid the cell was compiled with, when the source says
+        g = getattr(getattr(source, "options", None), "grid", None)
+        if g is None:
+            g = getattr(getattr(source, "cell", None), "grid", None)
+        size = float(g) if isinstance(g, int | float) and g > 0 else None
     rows = []
     for name in _zone_names(source):
         idx = grid_block(name)

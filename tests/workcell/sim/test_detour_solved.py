@@ -2,7 +2,7 @@
 
 No built-in cell reaches it: with the space grid the zones keep arms apart
 (the geometric check never stops one), and without it (``scara4`` with
-``separate_arms = false``) every geometric stop has the other arm standing
+``grid = 0``) every geometric stop has the other arm standing
 on the mover's next station (``goal_in_collision``: no detour, the arms back
 off instead). The cell here is ``scara4`` without the space grid plus a
 fifth SCARA with no capability, ``pole``, that never works and stands at its
@@ -28,7 +28,7 @@ import pytest
 
 import workcell
 from scheduler import solve
-from workcell import compile_cell_detailed, simulate
+from workcell import compile_cell, simulate
 from workcell.cell import load_cell
 from workcell.geometry import check_path, plan_detour
 from workcell.sim.monitor import SafetyMonitor
@@ -49,10 +49,10 @@ start = [0.0, 0.0, 0.3, 0.0]
 @pytest.fixture(scope="module")
 def run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     text = (Path(workcell.__file__).parent / "examples" / "scara4.toml").read_text()
-    text = text.replace("[compile]\n", "[compile]\nseparate_arms = false\n") + POLE
+    text = text.replace("[compile]\n", "[compile]\ngrid = 0\n") + POLE
     path = tmp_path_factory.mktemp("cell") / "cell.toml"
     path.write_text(text, encoding="utf-8")
-    cc = compile_cell_detailed(load_cell(path))
+    cc = compile_cell(load_cell(path))
     plan = solve(cc.problem, "greedy", seed=0).schedule
     assert plan is not None
     found: list[Any] = []

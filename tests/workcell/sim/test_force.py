@@ -15,7 +15,7 @@ import pytest
 from multiarm.errors import UsageError, ValidationError
 from scheduler import solve
 from tasklib.steps import ForceSearch
-from workcell import compile_cell_detailed, load_example
+from workcell import CompileOptions, compile_cell, load_example
 from workcell.sim import Crash, EmergencyStop, FaultPlan, simulate
 from workcell.sim.force import (
     CRASH_FORCE,
@@ -33,7 +33,7 @@ TASK = "insert_pin"
 
 @pytest.fixture(scope="module")
 def cell() -> Any:
-    return compile_cell_detailed(load_example("supersigma"))
+    return compile_cell(load_example("supersigma"))
 
 
 @pytest.fixture(scope="module")
@@ -278,7 +278,7 @@ def test_fewer_tries_than_planned_skip_the_rest_of_the_dwell() -> None:
     """Compiled with the worst case (all 13 tries planned), a hole found at
     the first try skips the rest of the search dwell; the arm then waits at
     its next zone border for the plan's time (it never passes it early)."""
-    worst = compile_cell_detailed(load_example("supersigma"), plan_with="worst")
+    worst = compile_cell(load_example("supersigma"), options=CompileOptions(plan_with="worst"))
     plan = solve(worst.problem, "greedy", seed=0).schedule
     assert plan is not None
     s = _search(worst, plan, 0)

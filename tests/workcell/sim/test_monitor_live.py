@@ -18,7 +18,7 @@ from numba import njit
 
 from multiarm.errors import UsageError
 from scheduler import Schedule, solve
-from workcell import compile_cell_detailed, load_example, simulate
+from workcell import compile_cell, load_example, simulate
 from workcell.geometry import CollisionWorld
 from workcell.sim import EmergencyStop
 from workcell.sim.monitor import SafetyMonitor, SafetyViolation, _segment_dist2
@@ -28,7 +28,7 @@ PERIOD = 0.02
 
 @pytest.fixture(scope="module")
 def supersigma() -> Any:
-    return compile_cell_detailed(load_example("supersigma"))
+    return compile_cell(load_example("supersigma"))
 
 
 def _greedy(cc: Any) -> Schedule:
@@ -47,7 +47,7 @@ def _violation(cc: Any, plan: Schedule, monitor: str, **kw: Any) -> SafetyViolat
 def test_a_colliding_run_stops_at_the_first_sample_the_post_run_check_reports(name: str) -> None:
     """Without the space grid and the coordinator's geometric check the
     greedy plans collide (tests/workcell/test_space_grid.py)."""
-    cc = compile_cell_detailed(dataclasses.replace(load_example(name), separate_arms=False))
+    cc = compile_cell(dataclasses.replace(load_example(name), grid=0.0))
     plan = _greedy(cc)
     live = _violation(cc, plan, "live", _geometry=False)
     post = _violation(cc, plan, "post", _geometry=False)
@@ -123,7 +123,7 @@ def test_a_broken_zone_invariant_stops_the_run_live(supersigma: Any) -> None:
 
 @pytest.mark.parametrize("name", ["supersigma", "scara4"])
 def test_nominal_runs_pass_and_the_monitor_does_not_change_them(name: str) -> None:
-    cc = compile_cell_detailed(load_example(name))
+    cc = compile_cell(load_example(name))
     plan = _greedy(cc)
     on = simulate(cc, plan, seed=0)  # live monitor, the default
     off = simulate(cc, plan, seed=0, monitor=False)
@@ -208,7 +208,7 @@ def test_live_and_post_run_agree_on_randomly_broken_plans(name: str, separate: b
     """Seeded random edits of the greedy plan (arms swapped, starts moved),
     run with the coordinator's zone and geometric checks off: the live
     monitor and the post-run check name the same first violation, or none."""
-    cc = compile_cell_detailed(dataclasses.replace(load_example(name), separate_arms=separate))
+    cc = compile_cell(dataclasses.replace(load_example(name), grid=0.3 if separate else 0.0))
     p = cc.problem
     base = _greedy(cc)
     rng = np.random.default_rng(1)

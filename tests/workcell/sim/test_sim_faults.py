@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from multiarm.errors import UsageError, ValidationError
 from scheduler import solve
-from workcell import compile_cell_detailed, load_example
+from workcell import compile_cell, load_example
 from workcell.sim import (
     ArmFailure,
     Crash,
@@ -26,7 +26,7 @@ from workcell.sim import (
 
 @pytest.fixture(scope="module")
 def cell() -> Any:
-    return compile_cell_detailed(load_example("supersigma"))
+    return compile_cell(load_example("supersigma"))
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +36,7 @@ def plan(cell: Any) -> Any:
 
 @pytest.fixture(scope="module")
 def scara4() -> Any:
-    return compile_cell_detailed(load_example("scara4"))
+    return compile_cell(load_example("scara4"))
 
 
 @pytest.fixture(scope="module")
@@ -309,9 +309,7 @@ def test_random_fault_plans_are_safe_and_lose_nothing(seed: int, n: int) -> None
     message loss, an arm failure): the monitor never fires on a
     coordinator-driven run, every task ends done or failed with a cause, and
     the same seed gives the same trace."""
-    cc = _CELL.get("cc") or _CELL.setdefault(
-        "cc", compile_cell_detailed(load_example("supersigma"))
-    )
+    cc = _CELL.get("cc") or _CELL.setdefault("cc", compile_cell(load_example("supersigma")))
     sched = _CELL.get("plan") or _CELL.setdefault(
         "plan", solve(cc.problem, "greedy", seed=0).schedule
     )

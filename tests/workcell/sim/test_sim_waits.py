@@ -5,12 +5,12 @@ from __future__ import annotations
 import pytest
 
 from scheduler import solve
-from workcell import compile_cell_detailed, load_example, simulate
+from workcell import compile_cell, load_example, simulate
 
 
 @pytest.mark.parametrize("name", ["supersigma", "scara4"])
 def test_border_waits_count_each_stop_once(name: str) -> None:
-    cc = compile_cell_detailed(load_example(name))
+    cc = compile_cell(load_example(name))
     plan = solve(cc.problem, "greedy", seed=0).schedule
     assert plan.total_wait() > 0  # the case has waits to count
     m = simulate(cc, plan, seed=0, monitor=False).metrics

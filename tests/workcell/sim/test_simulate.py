@@ -17,7 +17,7 @@ import pytest
 
 from multiarm.errors import UsageError, ValidationError
 from scheduler import Schedule, solve, validate
-from workcell import compile_cell_detailed, load_example
+from workcell import compile_cell, load_example
 from workcell.sim import (
     MESSAGE_BYTES,
     ActivateZones,
@@ -39,12 +39,12 @@ GOLDEN = Path(__file__).parent / "golden" / "supersigma_trace.json"
 
 @pytest.fixture(scope="module")
 def supersigma() -> Any:
-    return compile_cell_detailed(load_example("supersigma"))
+    return compile_cell(load_example("supersigma"))
 
 
 @pytest.fixture(scope="module")
 def scara4() -> Any:
-    return compile_cell_detailed(load_example("scara4"))
+    return compile_cell(load_example("scara4"))
 
 
 @pytest.fixture(scope="module")
@@ -114,7 +114,7 @@ def test_cell8_runs_as_planned_with_the_geometric_check_on() -> None:
     do and their successors."""
     from workcell.sim import ArmFailure
 
-    cc = compile_cell_detailed(load_example("cell8"))
+    cc = compile_cell(load_example("cell8"))
     p = cc.problem
     plan = solve(p, "greedy", seed=0).schedule
     r = simulate(cc, plan, monitor=False)
