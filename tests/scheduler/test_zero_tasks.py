@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from scheduler import SOLVERS, Model, save_problem, solve, validate
+from scheduler.reference import solve_reference
 from workcell.cli import main
 
 
@@ -34,6 +35,11 @@ def test_every_solver_returns_an_empty_optimal_plan(solver: str, waits: bool) ->
     assert "no tasks" in plan.table()
     assert plan.table(max_rows=0) == plan.table()
     assert plan.to_csv().count("\n") == 1  # the header only
+
+
+def test_the_reference_on_an_empty_problem() -> None:
+    r = solve_reference(_empty(zones=True).build(), 1, 0)
+    assert (r.status, r.makespan, r.bound) == ("optimal", 0.0, 0.0)
 
 
 @pytest.mark.parametrize("solver", SOLVERS)
