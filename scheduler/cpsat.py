@@ -3,18 +3,22 @@
 Variables and constraints (times scaled to integers, see below):
 
 * per task ``t``: start ``S_t``, end ``E_t``, a literal ``x_m`` per mode with
-  ``sum_m x_m = 1``; per mode, a wait ``w_mj >= 0`` at each zone border ``j``
-  (when waits are allowed) and ``E_t = S_t + d_m + sum_j w_mj`` if ``x_m``;
-* arms: the optional mode intervals ``[S_t, E_t)`` of an arm never overlap —
-  ``NoOverlap`` without setup times, otherwise a ``Circuit`` over the arm's
+  ``sum_m x_m = 1``; per mode, a chain of delay points ``P_m,i >= P_m,i-1``
+  (``P_m,0 = S_t``), one for each zone border ``i`` a constraint refers to:
+  ``P_m,i - S_t`` is the sum of the waits at borders up to ``i`` (when waits
+  are allowed; waits at borders nothing refers to are never needed), and
+  ``E_t = P_m,last + d_m`` if ``x_m``;
+* arms: the optional mode intervals ``[S_t, E_t)`` of an arm never overlap
+  (``NoOverlap``), and with setup times a ``Circuit`` over the arm's
   modes whose arcs enforce ``S_t' >= E_t + setup(t, t')`` (and the setup from
   the initial pose after the depot);
 * exclusive zones: ``NoOverlap`` over the occupancy intervals
-  ``[S_t + s + W<=(s), S_t + e + W<(e))`` of every window in the zone (and
-  ``[0, departure)`` of an arm that starts inside it); shared zones:
-  ``NoOverlap`` over the movement pieces between borders; tools:
-  ``NoOverlap`` over ``[S_t, E_t)`` of the modes holding them
-  (:mod:`scheduler.timing` defines these intervals);
+  ``[P_m,i + s, P_m,k + e)`` of every window ``[s, e)`` in the zone, ``i`` the
+  borders ``<= s`` and ``k`` those ``< e`` (and ``[0, departure)`` of an arm
+  that starts inside it); shared zones: ``NoOverlap`` over the movement
+  pieces between borders; tools: ``NoOverlap`` over ``[S_t, E_t)`` of the
+  modes holding them (:mod:`scheduler.timing` defines these intervals);
+  resources only one arm uses are left out (:func:`shared_resources`);
 * releases ``S_t >= r_t``, precedence ``S_t >= E_p``, arm availability;
 * a redundant ``Cumulative`` of capacity (number of arms) over the task
   intervals, and ``makespan >= E_t``; minimise the makespan.
@@ -26,9 +30,13 @@ are rounded outwards (starts down, ends up) at a 1e-3 resolution: the
 schedules stay valid but the bound falls back to :func:`lower_bound`.
 The search is hinted with the earliest-finish-time schedule that also sets
 the horizon (``hint=False`` to start cold). The blocking oracle is not
-modelled: with one, the solution's modes and
-start order are decoded again chronologically with the oracle's detours, and
-CP-SAT's bound (of a relaxation) is kept.
+modelled: when every detour it charges is finite, each mode is padded with
+its largest (:func:`oracle_padding`; the schedule stays valid, the bound is
+not kept); otherwise the model leaves it out, a relaxation, so CP-SAT's bound
+(at an exact scale) is kept and a schedule no parked arm meets is taken as
+it is; one that meets a parked arm has its modes and start order decoded
+again chronologically with the oracle's detours.
+On compiled cells see :mod:`scheduler.reference`.
 """
 
 from __future__ import annotations
