@@ -24,6 +24,10 @@ measuring its whole comparison in one run) and ``benchmarks/sweeps/cells.toml``
 4. Schedule quality on the compiled cells: greedy, tree and CP-SAT at the
    same time limit (seed 0), makespans checked by ``scheduler.validate``
    (:func:`workcell.experiments.analysis.cells_table`).
+5. The exact reference and the bounds (:func:`references`, sweep
+   ``benchmarks/sweeps/cells_reference.toml``): tree at 10 s, CP-SAT's general
+   model at 60 s, the no-wait reference of :mod:`scheduler.reference` at 60 s,
+   the best lower bound and the gaps to it.
 
 The schedule sweep resumes where a previous run stopped (``--fresh`` runs it
 again); the speed measurements are always taken again.
@@ -163,6 +167,73 @@ def validity_checks(seed: int, states: int) -> dict[str, Any]:
     }
 
 
+def references(
+    seed: int,
+    cells: tuple[str, ...] | list[str],
+    tree_time: float = 10.0,
+    cpsat_time: float = 60.0,
+    reference_time: float = 60.0,
+    bound_time: float = 10.0,
+) -> list[dict[str, Any]]:
+    """Per built-in cell, side by side in one run: the tree search, CP-SAT's
+    general model, the no-wait reference and the bounds (seed ``seed``,
+    2 CP-SAT workers; :mod:`scheduler.reference`).
+
+    * tree: ``solve(p, "tree", tree_time)`` (waits allowed);
+    * CP-SAT: ``solve(p, "cpsat", cpsat_time)``: the general model (waits at
+      every border), its status, makespan and bound;
+    * reference: :func:`scheduler.reference.solve_reference` for
+      ``reference_time`` seconds, hinted with the tree's plan: the best
+      schedule without waits at zone borders, proven or not, and the bound of
+      the no-wait optimum;
+    * best bound: the largest bound of the true problem (``lower_bound``, the
+      zone-free relaxation after ``bound_time`` seconds, CP-SAT's bound).
+    """
+    from scheduler import lower_bound, solve
+    from scheduler.reference import solve_reference
+    from workcell import compile_cell
+
+    rows = []
+    for name in cells:
+        compiled = compile_cell(load_example(name))
+        p = getattr(compiled, "problem", compiled)
+        lb = lower_bound(p)
+        tree = solve(p, "tree", time_limit=tree_time, seed=seed)
+        cp = solve(p, "cpsat", time_limit=cpsat_time, seed=seed)
+        ref = solve_reference(
+            p, reference_time, seed, hint=tree.schedule, bound_time=bound_time, workers=2
+        )
+        best = max(lb, ref.bound, cp.bound if cp.schedule is not None else 0.0)
+
+        def gap(x: float, best: float = best) -> str:
+            return f"{x / best - 1:.1%}" if math.isfinite(x) and best > 0 else "-"
+
+        rows.append(
+            {
+                "cell": name,
+                "tasks": p.n_tasks,
+                "zones": p.n_zones,
+                "windows": p.n_windows,
+                "tree (s)": round(tree.objective, 2),
+                "cpsat status": cp.status.value,
+                "cpsat (s)": round(cp.objective, 2) if math.isfinite(cp.objective) else "none",
+                "cpsat bound (s)": round(cp.bound, 2),
+                "no-wait ref status": ref.status,
+                "no-wait ref (s)": round(ref.makespan, 2)
+                if math.isfinite(ref.makespan)
+                else "none",
+                "no-wait bound (s)": round(ref.nowait_bound, 2),
+                "ref dtime": round(ref.deterministic_time, 1),
+                "ref wall (s)": round(ref.seconds, 1),
+                "lower_bound (s)": round(lb, 2),
+                "best bound (s)": round(best, 2),
+                "tree gap": gap(tree.objective),
+                "ref gap": gap(ref.makespan),
+            }
+        )
+    return rows
+
+
 def _table(rows: list[dict[str, Any]]) -> str:
     cols = list(rows[0])
     out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
@@ -198,8 +269,15 @@ def main(argv: list[str] | None = None) -> None:
         sweep_file="cells_compile",
     )
     sched = run_table_sweep("cells", args, out)
+    refs = run_table_sweep(
+        "cells",
+        argparse.Namespace(**{**vars(args), "fresh": True}),
+        out,
+        sweep_file="cells_reference",
+    )
     head = ["family", "instance", "seed", "repetition", "load_average"]
     parts = {f: measurements(speed, f).drop(columns=head) for f in ("compile", "detours", "checks")}
+    parts["reference"] = measurements(refs, "reference").drop(columns=head)
     limits = sorted({float(t) for t in sched["time_limit"].dropna()})
     md = (
         "# Built-in cells\n\nMachine: 2 cores shared with other work while this ran; times are"
@@ -212,20 +290,28 @@ def main(argv: list[str] | None = None) -> None:
         + _table(parts["checks"].to_dict("records"))
         + f"\n## Schedules at {', '.join(f'{t:g}' for t in limits)} s per solver (seed 0, validated)\n\n"
         + cells_table(sched)
+        + "\n## Exact reference and bounds (tree 10 s, CP-SAT 60 s, no-wait reference 60 s,"
+        " zone-free relaxation 10 s; seed 0, 2 CP-SAT workers)\n\n"
+        + _table(parts["reference"].to_dict("records"))
+        + "\nThe no-wait reference is proven only when its status says optimal; its bound"
+        " bounds the no-wait optimum, the best bound bounds the true problem (waits and"
+        " detours allowed); gaps are to the best bound (docs/scheduler.md, 'How exact is"
+        " the reference').\n"
     )
-    both = pd.concat([speed, sched], ignore_index=True)
+    both = pd.concat([speed, sched, refs], ignore_index=True)
     path = publish(
         "cells",
         both,
         md,
         out,
-        sweeps=("cells_compile", "cells"),
+        sweeps=("cells_compile", "cells", "cells_reference"),
         quick=args.quick,
         flags="--fresh",
         extra={
             "compile": parts["compile"].to_dict("records"),
             "detours": parts["detours"].to_dict("records"),
             "checks": parts["checks"].to_dict("records"),
+            "reference": parts["reference"].to_dict("records"),
         },
         rows=sched.drop(columns=["dependencies"]),
     )

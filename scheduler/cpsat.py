@@ -3,18 +3,22 @@
 Variables and constraints (times scaled to integers, see below):
 
 * per task ``t``: start ``S_t``, end ``E_t``, a literal ``x_m`` per mode with
-  ``sum_m x_m = 1``; per mode, a wait ``w_mj >= 0`` at each zone border ``j``
-  (when waits are allowed) and ``E_t = S_t + d_m + sum_j w_mj`` if ``x_m``;
-* arms: the optional mode intervals ``[S_t, E_t)`` of an arm never overlap —
-  ``NoOverlap`` without setup times, otherwise a ``Circuit`` over the arm's
+  ``sum_m x_m = 1``; per mode, a chain of delay points ``P_m,i >= P_m,i-1``
+  (``P_m,0 = S_t``), one for each zone border ``i`` a constraint refers to:
+  ``P_m,i - S_t`` is the sum of the waits at borders up to ``i`` (when waits
+  are allowed; waits at borders nothing refers to are never needed), and
+  ``E_t = P_m,last + d_m`` if ``x_m``;
+* arms: the optional mode intervals ``[S_t, E_t)`` of an arm never overlap
+  (``NoOverlap``), and with setup times a ``Circuit`` over the arm's
   modes whose arcs enforce ``S_t' >= E_t + setup(t, t')`` (and the setup from
   the initial pose after the depot);
 * exclusive zones: ``NoOverlap`` over the occupancy intervals
-  ``[S_t + s + W<=(s), S_t + e + W<(e))`` of every window in the zone (and
-  ``[0, departure)`` of an arm that starts inside it); shared zones:
-  ``NoOverlap`` over the movement pieces between borders; tools:
-  ``NoOverlap`` over ``[S_t, E_t)`` of the modes holding them
-  (:mod:`scheduler.timing` defines these intervals);
+  ``[P_m,i + s, P_m,k + e)`` of every window ``[s, e)`` in the zone, ``i`` the
+  borders ``<= s`` and ``k`` those ``< e`` (and ``[0, departure)`` of an arm
+  that starts inside it); shared zones: ``NoOverlap`` over the movement
+  pieces between borders; tools: ``NoOverlap`` over ``[S_t, E_t)`` of the
+  modes holding them (:mod:`scheduler.timing` defines these intervals);
+  resources only one arm uses are left out (:func:`shared_resources`);
 * releases ``S_t >= r_t``, precedence ``S_t >= E_p``, arm availability;
 * a redundant ``Cumulative`` of capacity (number of arms) over the task
   intervals, and ``makespan >= E_t``; minimise the makespan.
@@ -26,13 +30,18 @@ are rounded outwards (starts down, ends up) at a 1e-3 resolution: the
 schedules stay valid but the bound falls back to :func:`lower_bound`.
 The search is hinted with the earliest-finish-time schedule that also sets
 the horizon (``hint=False`` to start cold). The blocking oracle is not
-modelled: with one, the solution's modes and
-start order are decoded again chronologically with the oracle's detours, and
-CP-SAT's bound (of a relaxation) is kept.
+modelled: when every detour it charges is finite, each mode is padded with
+its largest (:func:`oracle_padding`; the schedule stays valid, the bound is
+not kept); otherwise the model leaves it out, a relaxation, so CP-SAT's bound
+(at an exact scale) is kept and a schedule no parked arm meets is taken as
+it is; one that meets a parked arm has its modes and start order decoded
+again chronologically with the oracle's detours.
+On compiled cells see :mod:`scheduler.reference`.
 """
 
 from __future__ import annotations
 
+import bisect
 import itertools
 import math
 import time
@@ -45,7 +54,7 @@ from scheduler.result import Result, SolveStatus
 from scheduler.schedule import Schedule, ScheduleError, validate
 from scheduler.start import begin
 
-__all__ = ["build_model", "integer_scale", "solve_cpsat"]
+__all__ = ["build_model", "integer_scale", "shared_resources", "solve_cpsat"]
 
 
 def _integral(values: Any, scale: float) -> bool:
@@ -54,23 +63,26 @@ def _integral(values: Any, scale: float) -> bool:
     return bool(np.all(np.abs(v - np.round(v)) <= 1e-9 * np.maximum(1.0, np.abs(v))))
 
 
-def integer_scale(problem: Problem) -> tuple[float, bool]:
-    """(scale, exact): the power of ten that makes the data integral, if any."""
-    p = problem
+def _time_values(p: Problem) -> Any:
+    """Every number of the problem that is a time (setups included), or None
+    when the setups are too many to list."""
     data = [p.mode_duration, p.win_start, p.win_end, p.task_release, p.arm_available]
     setups = []
     if not p._setup.zero:
         for a in range(p.n_arms):
             tasks = np.flatnonzero(p.mode_of[a] >= 0)
             if len(tasks) * (len(tasks) + 1) > 2_000_000:
-                return 1000.0, False
+                return None
             for prev in (-1, *tasks.tolist()):
                 setups.append(p.setup_row(a, prev)[tasks])
-    allv = (
-        np.concatenate([np.ravel(d) for d in data] + setups)
-        if setups or any(len(d) for d in data)
-        else np.zeros(0)
-    )
+    return np.concatenate([np.ravel(d) for d in data] + setups)
+
+
+def integer_scale(problem: Problem) -> tuple[float, bool]:
+    """(scale, exact): the power of ten that makes the data integral, if any."""
+    allv = _time_values(problem)
+    if allv is None:
+        return 1000.0, False
     for k in range(7):
         s = 10.0**k
         if _integral(allv, s) and (allv.size == 0 or np.max(np.abs(allv)) * s < 2**40):
@@ -78,37 +90,120 @@ def integer_scale(problem: Problem) -> tuple[float, bool]:
     return 1000.0, False
 
 
+def shared_resources(problem: Problem) -> frozenset[int]:
+    """Resources (numbered as in :mod:`scheduler.timing`) that two arms can use.
+
+    A zone, shared zone's movement or tool used only by the modes of one arm
+    (and, for an exclusive zone, stood in at the start by no other arm) never
+    constrains a schedule: an arm's tasks never overlap, and every window lies
+    inside its task. Only the others need a constraint.
+
+    Returns
+    -------
+    frozenset of int
+    """
+    p = problem
+    arms_of: dict[int, set[int]] = {}
+    for m, sh in enumerate(p.shapes.modes):
+        a = int(p.mode_arm[m])
+        for r, _, _ in (*sh.exclusive, *sh.moves):
+            arms_of.setdefault(r, set()).add(a)
+        for r in sh.tools:
+            arms_of.setdefault(r, set()).add(a)
+    for a, zs in enumerate(p.arm_start_zones):
+        for z in zs:
+            if p.zone_exclusive[z]:
+                arms_of.setdefault(int(z), set()).add(a)
+    return frozenset(r for r, arms in arms_of.items() if len(arms) > 1)
+
+
+def _rounders(scale: float, exact: bool, rounding: str) -> tuple[Any, Any]:
+    """(lo, hi): the roundings of starts and of ends/lengths/gaps to model units."""
+
+    def near(x: float) -> int:
+        return round(x * scale)
+
+    def down(x: float) -> int:
+        return math.floor(x * scale + 1e-9)
+
+    def up(x: float) -> int:
+        return math.ceil(x * scale - 1e-9)
+
+    if exact:
+        return near, near
+    if rounding == "out":
+        return down, up
+    return up, down
+
+
 def build_model(
-    problem: Problem, horizon: float, *, waits: bool = True, pad: Any = None
+    problem: Problem,
+    horizon: float,
+    *,
+    waits: bool = True,
+    pad: Any = None,
+    unit: float | None = None,
+    rounding: str = "out",
 ) -> tuple[Any, dict[str, Any]]:
     """The CP-SAT model and its variables (see the module docstring).
 
-    ``pad`` : (M,) float or None, seconds added at the end of each mode (the
-    tools held through it): the largest detour a blocking oracle can charge
-    the mode, so that every solution stays valid whatever arms are parked.
+    Parameters
+    ----------
+    problem : Problem
+    horizon : float
+        Seconds: no schedule of interest ends later (a known schedule's
+        makespan); the model allows some slack beyond it.
+    waits : bool
+        Whether the arms may wait at zone borders.
+    pad : (M,) float or None
+        Seconds added at the end of each mode (the tools held through it):
+        the largest detour a blocking oracle can charge the mode, so that
+        every solution stays valid whatever arms are parked.
+    unit : float or None
+        The model's time unit in seconds; None: the exact unit of
+        :func:`integer_scale` (1 ms, rounded outwards, when there is none).
+    rounding : {"out", "in"}
+        With a unit that does not divide the data: ``"out"`` rounds every
+        start down and every end, length and gap up, so that each solution
+        is a valid schedule; ``"in"`` rounds the other way and drops what
+        rounds to nothing, so that every valid schedule maps to a solution
+        and the model's bound times the unit bounds the problem.
+
+    Returns
+    -------
+    (CpModel, dict)
+        The variables: ``S``, ``E`` (per task), ``X`` (per mode), ``P`` (per
+        mode, the delay points by border index), ``makespan``, and ``scale``
+        (units per second) and ``exact`` (the unit divides every number).
     """
     from ortools.sat.python import cp_model
 
     p = problem
-    scale, exact = integer_scale(p)
-
-    def lo(x: float) -> int:
-        return math.floor(x * scale + 1e-9)
-
-    def hi(x: float) -> int:
-        return math.ceil(x * scale - 1e-9)
-
-    H = hi(horizon) + 1
-    mdl = cp_model.CpModel()
+    if unit is None:
+        scale, exact = integer_scale(p)
+    else:
+        scale = 1.0 / unit
+        allv = _time_values(p)
+        exact = allv is not None and _integral(allv, scale)
+    lo, hi = _rounders(scale, exact, rounding)
+    relax = rounding == "in" and not exact
+    shared = shared_resources(p)
+    shapes = p.shapes
     T = p.n_tasks
+    max_refs = max((len(sh.borders) for sh in shapes.modes), default=0)
+    H = (
+        hi(horizon) + 1
+        if exact
+        else math.ceil(horizon * scale * 1.02) + 2 * (max_refs + 2) * T + 10
+    )
+    mdl = cp_model.CpModel()
     S = [mdl.new_int_var(hi(float(p.task_release[t])), H, f"S{t}") for t in range(T)]
     E = [mdl.new_int_var(0, H, f"E{t}") for t in range(T)]
     X: dict[int, Any] = {}
-    W: dict[int, list[Any]] = {}
+    P: dict[int, dict[int, Any]] = {}
     mode_iv: dict[int, Any] = {}
     res_iv: dict[int, list[Any]] = {}
     master = []
-    shapes = p.shapes
     for t in range(T):
         lits = []
         size_t = mdl.new_int_var(0, H, f"D{t}")
@@ -118,55 +213,57 @@ def build_model(
             X[m] = x
             lits.append(x)
             sh = shapes[m]
-            nb = len(sh.borders)
-            ws = [mdl.new_int_var(0, H, f"w{m}_{j}") for j in range(nb)] if (waits and nb) else []
-            W[m] = ws
-            d = hi(sh.duration + (float(pad[m]) if pad is not None else 0.0))
-            total = d + sum(ws)
-            mdl.add(size_t == total).only_enforce_if(x)
-            mdl.add(E[t] == S[t] + total).only_enforce_if(x)
+            borders = sh.borders
+
+            def at_or_before(off: float, borders: tuple[float, ...] = borders) -> int:
+                return bisect.bisect_right(borders, off) if waits else 0
+
+            def before(off: float, borders: tuple[float, ...] = borders) -> int:
+                return bisect.bisect_left(borders, off) if waits else 0
+
+            # (resource, delay index of the start, start offset, index of the end, end offset)
+            pieces: list[tuple[int, int, float, int, float]] = []
+            for r, s, e in sh.exclusive:
+                if r in shared:
+                    pieces.append((r, at_or_before(s), s, before(e), e))
+            for r, s, e in sh.moves:
+                if r in shared:
+                    cuts = [b for b in borders if s < b < e] if waits else []
+                    for p0, p1 in itertools.pairwise([s, *cuts, e]):
+                        i = at_or_before(p0)
+                        pieces.append((r, i, p0, i, p1))
+            refs = sorted({0} | {i for _, i, _, _, _ in pieces} | {k for *_, k, _ in pieces})
+            # the delay before border i: P[i] - S is the sum of the waits at borders
+            # 1..i (waits at borders no constraint refers to are never needed)
+            pts: dict[int, Any] = {0: S[t]}
+            prev = S[t]
+            for i in refs[1:]:
+                v = mdl.new_int_var(0, H, f"P{m}_{i}")
+                mdl.add(v >= prev)
+                pts[i] = v
+                prev = v
+            P[m] = pts
+            d = float(sh.duration) + (float(pad[m]) if pad is not None else 0.0)
+            mdl.add(E[t] == prev + hi(d)).only_enforce_if(x)
+            mdl.add(size_t == E[t] - S[t]).only_enforce_if(x)
             a = int(p.mode_arm[m])
             mdl.add(S[t] >= hi(float(p.arm_available[a]) + p.setup_time(a, -1, t))).only_enforce_if(
                 x
             )
             mode_iv[m] = mdl.new_optional_interval_var(S[t], size_t, E[t], x, f"I{m}")
-            bidx = {b: j for j, b in enumerate(sh.borders)}
-
-            def shift(
-                off: float,
-                inclusive: bool,
-                sh: Any = sh,
-                ws: list[Any] = ws,
-                bidx: dict[float, int] = bidx,
-            ) -> Any:
-                return (
-                    sum(ws[bidx[b]] for b in sh.borders if (b < off or (inclusive and b == off)))
-                    if ws
-                    else 0
-                )
-
-            for r, s, e in sh.exclusive:
-                st = mdl.new_int_var(0, H, f"zs{m}_{r}_{s}")
-                en = mdl.new_int_var(0, H, f"ze{m}_{r}_{s}")
-                mdl.add(st == S[t] + lo(s) + shift(s, True)).only_enforce_if(x)
-                mdl.add(en == S[t] + hi(e) + shift(e, False)).only_enforce_if(x)
-                res_iv.setdefault(r, []).append(
-                    mdl.new_optional_interval_var(st, mdl.new_int_var(0, H, ""), en, x, f"Z{m}_{r}")
-                )
-            for r, s, e in sh.moves:
-                cuts = [b for b in sh.borders if s < b < e] if ws else []
-                pts = [s, *cuts, e]
-                for p0, p1 in itertools.pairwise(pts):
-                    st = mdl.new_int_var(0, H, "")
-                    mdl.add(st == S[t] + lo(p0) + shift(p0, True)).only_enforce_if(x)
-                    size = hi(p1) - lo(p0)
-                    res_iv.setdefault(r, []).append(
-                        mdl.new_optional_interval_var(
-                            st, size, mdl.new_int_var(0, H, ""), x, f"M{m}_{r}"
-                        )
-                    )
+            for r, i, s, k, e in pieces:
+                fixed = hi(e) - lo(s)
+                if relax and fixed <= 0:  # rounds to nothing: dropped (a relaxation)
+                    continue
+                if i == k:
+                    iv = mdl.new_optional_fixed_size_interval_var(pts[i] + lo(s), fixed, x, "")
+                else:
+                    size = mdl.new_int_var(max(fixed, 0), H, "")
+                    iv = mdl.new_optional_interval_var(pts[i] + lo(s), size, pts[k] + hi(e), x, "")
+                res_iv.setdefault(r, []).append(iv)
             for r in sh.tools:
-                res_iv.setdefault(r, []).append(mode_iv[m])
+                if r in shared:
+                    res_iv.setdefault(r, []).append(mode_iv[m])
         mdl.add_exactly_one(lits)
         for q in p.task_preds[t]:
             mdl.add(S[t] >= E[q])
@@ -175,9 +272,8 @@ def build_model(
         modes = [int(m) for m in np.flatnonzero(p.mode_arm == a)]
         if not modes:
             continue
-        if p._setup.zero:
-            mdl.add_no_overlap([mode_iv[m] for m in modes])
-        else:
+        mdl.add_no_overlap([mode_iv[m] for m in modes])  # redundant with setups
+        if not p._setup.zero:
             arcs = []
             for i, m in enumerate(modes, start=1):
                 t = int(p.mode_task[m])
@@ -195,7 +291,7 @@ def build_model(
             mdl.add_circuit(arcs)
     # arms standing in exclusive start zones until they leave
     for a in range(p.n_arms):
-        zs = [z for z in p.arm_start_zones[a] if p.zone_exclusive[z]]
+        zs = [z for z in p.arm_start_zones[a] if p.zone_exclusive[z] and z in shared]
         if not zs:
             continue
         modes = [int(m) for m in np.flatnonzero(p.mode_arm == a)]
@@ -205,7 +301,7 @@ def build_model(
             for m in modes:
                 t = int(p.mode_task[m])
                 e_m = mdl.new_int_var(-H, H, "")
-                mdl.add(e_m == S[t] - hi(p.setup_time(a, -1, t))).only_enforce_if(X[m])
+                mdl.add(e_m == S[t] - lo(p.setup_time(a, -1, t))).only_enforce_if(X[m])
                 mdl.add(e_m == H).only_enforce_if(~X[m])
                 cands.append(e_m)
             mdl.add_min_equality(dep, cands)
@@ -220,7 +316,44 @@ def build_model(
     mk = mdl.new_int_var(0, H, "makespan")
     mdl.add_max_equality(mk, E)
     mdl.minimize(mk)
-    return mdl, {"S": S, "E": E, "X": X, "W": W, "makespan": mk, "scale": scale, "exact": exact}
+    return mdl, {"S": S, "E": E, "X": X, "P": P, "makespan": mk, "scale": scale, "exact": exact}
+
+
+def _schedule_of(problem: Problem, solver: Any, v: dict[str, Any], pad: Any) -> Schedule:
+    """The schedule of a solved model (starts and waits in seconds)."""
+    p, scale = problem, v["scale"]
+    T = p.n_tasks
+    modes = np.array(
+        [next(m for m in p.task_modes[t] if solver.boolean_value(v["X"][m])) for t in range(T)]
+    )
+    starts = np.array([solver.value(v["S"][t]) / scale for t in range(T)])
+    ws = []
+    for t in range(T):
+        m = int(modes[t])
+        w = np.zeros(len(p.shapes[m].borders))
+        pts = v["P"][m]
+        prev = solver.value(pts[0])
+        for i in sorted(pts)[1:]:
+            cur = solver.value(pts[i])
+            w[i - 1] = (cur - prev) / scale
+            prev = cur
+        ws.append(w)
+    return Schedule.from_starts(p, modes, starts, ws, None if pad is None else pad[modes])
+
+
+def _add_hint(mdl: Any, problem: Problem, v: dict[str, Any], hint: Schedule) -> None:
+    """Hint the model with a schedule (rounded to the model's unit)."""
+    p, scale = problem, v["scale"]
+    for t in range(p.n_tasks):
+        mh = int(hint.mode[t])
+        st = float(hint.start[t])
+        mdl.add_hint(v["S"][t], round(st * scale))
+        for m in p.task_modes[t]:
+            mdl.add_hint(v["X"][m], int(m == mh))
+        cw = np.concatenate([[0.0], np.cumsum(hint.waits[t])]) if len(hint.waits[t]) else [0.0]
+        for i, var in v["P"][mh].items():
+            if i:
+                mdl.add_hint(var, round((st + float(cw[i])) * scale))
 
 
 def oracle_padding(problem: Problem, max_queries: int = 200_000) -> Any:
@@ -263,13 +396,18 @@ def solve_cpsat(
     max_deterministic_time: float | None = None,
     on_solver: Any = None,
     callback: bool = True,
+    unit: float | None = None,
 ) -> Result:
     """Solve with CP-SAT (see the module docstring).
 
     ``hint``: a Schedule to start from (e.g. the previous plan when
-    re-solving); ``True`` (default) hints the earliest-finish-time schedule
-    that also sets the horizon — without it CP-SAT often finds no first
-    solution on problems with setup circuits; ``False`` hints nothing."""
+    re-solving, or another solver's plan); ``True`` (default) hints the
+    earliest-finish-time schedule that also sets the horizon — without it
+    CP-SAT often finds no first solution on problems with setup circuits;
+    ``False`` hints nothing. ``unit``: the model's time unit in seconds
+    (None: exact, see :func:`build_model`); a unit that does not divide the
+    data rounds outwards, so the schedules stay valid but the model's bound
+    is not kept."""
     from ortools.sat.python import cp_model
 
     st = begin(problem, "cpsat", seed, waits=waits)
@@ -286,6 +424,8 @@ def solve_cpsat(
             + 1e6
         )
     )
+    if isinstance(hint, Schedule):
+        horizon = max(horizon, hint.makespan) if first is not None else hint.makespan
     pad = oracle_padding(p)
     if pad is not None:  # every task padded with its largest detour: a serial bound
         horizon = float(
@@ -293,19 +433,17 @@ def solve_cpsat(
             + np.sum([max(p.mode_duration[m] + pad[m] for m in ms) for ms in p.task_modes])
             + float(np.max(p.arm_available))
         ) * 2 + (first.makespan if first is not None else 1e6)
-    mdl, v = build_model(p, horizon, waits=waits, pad=pad)
-    scale, exact = v["scale"], v["exact"] and p.blocking is None
+    mdl, v = build_model(p, horizon, waits=waits, pad=pad, unit=unit)
+    scale = v["scale"]
+    # without padding, the model ignores the blocking oracle: a relaxation, so
+    # its bound (at an exact unit) still bounds the problem
+    exact = v["exact"] and pad is None
     if hint is True:
         # with an oracle, the greedy schedule's detours only lengthen tasks: it
         # is still a solution of the relaxed model
         hint = ev.schedule(first) if first is not None else None
     if hint is not None and hint is not False:
-        for t in range(p.n_tasks):
-            mdl.add_hint(v["S"][t], round(float(hint.start[t]) * scale))
-            for m in p.task_modes[t]:
-                mdl.add_hint(v["X"][m], int(m == int(hint.mode[t])))
-            for j, w in enumerate(v["W"][int(hint.mode[t])]):
-                mdl.add_hint(w, round(float(hint.waits[t][j]) * scale))
+        _add_hint(mdl, p, v, hint)
     stats.phases["model"] = time.perf_counter() - t0
     solver = cp_model.CpSolver()
     if time_limit is not None:
@@ -329,6 +467,7 @@ def solve_cpsat(
     stats.nodes = int(solver.num_branches)
     stats.extra["conflicts"] = int(solver.num_conflicts)
     stats.extra["scale"] = scale
+    stats.extra["deterministic_time"] = float(solver.deterministic_time)
     bound = max(
         lb,
         solver.best_objective_bound / scale
@@ -349,34 +488,20 @@ def solve_cpsat(
     if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
         return Result(SolveStatus.UNKNOWN, None, math.inf, lb, runtime, "cpsat", seed, stats)
     T = p.n_tasks
-    modes = np.array(
-        [next(m for m in p.task_modes[t] if solver.boolean_value(v["X"][m])) for t in range(T)]
-    )
-    starts = np.array([solver.value(v["S"][t]) / scale for t in range(T)])
     sched: Schedule | None = None
-    if p.blocking is None or pad is not None:
-        ws = [
-            np.array([solver.value(w) / scale for w in v["W"][int(modes[t])]])
-            if v["W"][int(modes[t])]
-            else np.zeros(len(p.shapes[int(modes[t])].borders))
-            for t in range(T)
-        ]
-        cand = Schedule.from_starts(
-            p, modes, starts, ws, None if pad is None else pad[modes].astype(float)
-        )
-        try:
-            validate(p, cand)
-            sched = cand
-        except ScheduleError as exc:  # rounding (inexact scale) or a non-metric setup corner
-            stats.extra["redecoded"] = str(exc)
-    if sched is None or p.blocking is not None:
-        # with an oracle: decode the order and modes again with the detours actually charged
-        order = np.lexsort((np.arange(T), starts)).astype(np.int64)
-        sol = ev.evaluate(order, modes.astype(np.int64))
+    cand = _schedule_of(p, solver, v, pad)
+    try:
+        # with an oracle and no padding, valid only if no parked arm is in the way
+        validate(p, cand)
+        sched = cand
+    except ScheduleError as exc:  # a parked arm in the way, or a non-metric setup corner
+        stats.extra["redecoded"] = str(exc)
+    if sched is None:
+        # decode the order and modes again (with the detours the oracle charges)
+        order = np.lexsort((np.arange(T), cand.start)).astype(np.int64)
+        sol = ev.evaluate(order, cand.mode.astype(np.int64))
         if sol is not None:
-            again = ev.schedule(sol)
-            if sched is None or validate(p, again) < validate(p, sched):
-                sched = again
+            sched = ev.schedule(sol)
         if sched is None:
             return Result(SolveStatus.UNKNOWN, None, math.inf, bound, runtime, "cpsat", seed, stats)
     mk = validate(p, sched)

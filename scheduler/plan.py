@@ -113,7 +113,9 @@ class Plan:
             [str(r[c]) if c in ("task", "arm", "mode") else _num(float(r[c])) for c in ROW_COLUMNS]
             for r in shown
         ]
-        widths = [max(len(c), *(len(row[i]) for row in cells)) for i, c in enumerate(ROW_COLUMNS)]
+        if not rows:  # a problem without tasks: nothing to schedule
+            return "(no tasks: the plan is empty, makespan 0)"
+        widths = [max([len(c), *(len(row[i]) for row in cells)]) for i, c in enumerate(ROW_COLUMNS)]
         lines = [
             "  ".join(c.ljust(w) for c, w in zip(ROW_COLUMNS, widths, strict=True)).rstrip(),
             "  ".join("-" * w for w in widths),
