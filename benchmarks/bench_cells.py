@@ -195,8 +195,7 @@ def references(
 
     rows = []
     for name in cells:
-        compiled = compile_cell(load_example(name))
-        p = getattr(compiled, "problem", compiled)
+        p = compile_cell(load_example(name)).problem
         lb = lower_bound(p)
         tree = solve(p, "tree", time_limit=tree_time, seed=seed)
         cp = solve(p, "cpsat", time_limit=cpsat_time, seed=seed)

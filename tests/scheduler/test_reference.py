@@ -110,8 +110,7 @@ def test_supersigma_under_a_work_limit_is_repeatable() -> None:
     worker and a deterministic limit give the same valid schedule twice."""
     from workcell import compile_cell, load_example
 
-    compiled: Any = compile_cell(load_example("supersigma"))
-    p = getattr(compiled, "problem", compiled)
+    p = compile_cell(load_example("supersigma")).problem
     runs = [
         solve_reference(p, None, 0, workers=1, max_deterministic_time=0.3, bound_time=0)
         for _ in range(2)
