@@ -352,7 +352,7 @@ def cell_from_dict(
             raise _fail(where, f"expected a table, got {spec!r}")
         spec = dict(spec)
         start = spec.pop("start", None)
-        arm = arm_from_dict(str(arm_name), spec, where)
+        arm = arm_from_dict(str(arm_name), spec, where, base_dir=base_dir)
         if start is None:
             q = np.array(arm.home, dtype=float)
         else:

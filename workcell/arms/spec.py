@@ -2,7 +2,7 @@
 
 Keys common to every arm::
 
-    type = "gantry" | "scara" | "serial"
+    type = "gantry" | "scara" | "serial" | "urdf"
     base = [x, y, z, yaw]            # pose of the base in the cell (m, rad); default origin
     capabilities = ["gripper", ...]  # what the arm can do
     tools = ["screwdriver", ...]     # tool mounts
@@ -40,6 +40,15 @@ Keys common to every arm::
     kinds = ["revolute", ...]
     joint_limits, max_velocity, max_acceleration, max_jerk, radius
 
+``urdf`` (a robot description file, :mod:`workcell.arms.urdf`)::
+
+    urdf = "package:example-robot-data/robots/ur_description/urdf/ur5_robot.urdf"
+                                     # or a path, relative to the cell file
+    tool_link = "tool0"              # the link whose frame is the flange
+    joint_limits = [[lo, hi], ...]   # optional: narrower than the URDF's
+    velocity_scale = 0.5             # optional: fraction of the URDF's velocity limits
+    max_acceleration = [...]         # optional (default: 5/s times the velocity limits)
+
 Every error is a :class:`~multiarm.errors.ValidationError` whose message
 starts with ``where`` and the field (``cell.toml: arms.left.rails.x:
 expected 2 numbers, got 'abc'``); an unknown key is an error naming it.
@@ -59,6 +68,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -69,10 +79,11 @@ from workcell.arms.gantry import CartesianGantry
 from workcell.arms.profiles import StepperDrive
 from workcell.arms.scara import Scara
 from workcell.arms.serial import SerialArm
+from workcell.arms.urdf import UrdfArm
 
 __all__ = ["ARM_TYPES", "arm_from_dict"]
 
-ARM_TYPES = ("gantry", "scara", "serial")
+ARM_TYPES = ("gantry", "scara", "serial", "urdf")
 
 _COMMON = {"type", "base", "capabilities", "tools", "payload", "home"}
 _KEYS = {
@@ -100,6 +111,7 @@ _KEYS = {
         "max_jerk",
         "radius",
     },
+    "urdf": _COMMON | {"urdf", "tool_link", "joint_limits", "velocity_scale", "max_acceleration"},
 }
 _STEPPER = {
     "steps_per_turn",
@@ -220,7 +232,45 @@ def _stepper(data: Any, where: str) -> StepperDrive:
         raise ValidationError(f"{where}: {exc}") from None
 
 
-def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
+def _urdf_arm(
+    name: str, data: Mapping[str, Any], f: _Fields, common: dict[str, Any], base_dir: Path | None
+) -> UrdfArm:
+    for key in ("urdf", "tool_link"):
+        v = data.get(key)
+        if not isinstance(v, str) or not v:
+            raise f.fail(key, f"expected a non-empty string, got {v!r}")
+    kw: dict[str, Any] = {}
+    if (jl := f.pairs("joint_limits")) is not None:
+        kw["joint_limits"] = jl
+    if (vs := f.number("velocity_scale", positive=True)) is not None:
+        if vs > 1:
+            raise f.fail("velocity_scale", f"must be in (0, 1], got {vs!r}")
+        kw["velocity_scale"] = vs
+    if (acc := f.numbers("max_acceleration", positive=True)) is not None:
+        kw["max_acceleration"] = acc
+    try:
+        return UrdfArm(
+            name,
+            data["urdf"],
+            tool_link=data["tool_link"],
+            base_dir=base_dir,
+            **kw,
+            **common,
+        )
+    except ValidationError as exc:
+        # name the field: a file problem is the urdf's, a count the field's
+        msg = str(exc)
+        if "for tool_link" in msg:
+            raise f.fail("tool_link", msg) from None
+        for key in ("joint_limits", "max_acceleration", "home"):
+            if key in msg:
+                raise f.fail(key, msg) from None
+        raise f.fail("urdf", msg) from None
+
+
+def arm_from_dict(
+    name: str, data: Mapping[str, Any], where: str, *, base_dir: Path | None = None
+) -> DriveArm:
     """Build an arm from a cell file's ``[arms.NAME]`` table (module docstring).
 
     Parameters
@@ -231,10 +281,12 @@ def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
         The table's content.
     where : str
         Prefix of every error message (the file and the table's path).
+    base_dir : Path, optional
+        Directory a relative ``urdf`` path is relative to (the cell file's).
 
     Returns
     -------
-    CartesianGantry, Scara or SerialArm
+    CartesianGantry, Scara, SerialArm or UrdfArm
 
     Raises
     ------
@@ -307,6 +359,8 @@ def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
             if (r := f.number("radius", positive=True)) is not None:
                 kw["radius"] = r
             return Scara(name, **kw, **common)
+        if kind == "urdf":
+            return _urdf_arm(name, data, f, common, base_dir)
         kw = {}
         example = data.get("example")
         if example is not None:
