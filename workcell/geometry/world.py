@@ -398,7 +398,7 @@ class CollisionWorld:
     def add_arm_meshes(
         self, arm: UrdfArm, group: str | None = None, q: FloatArray | None = None
     ) -> tuple[str, ...]:
-        """Add the collision meshes of a URDF arm as ``"<arm>/<link>"`` BVH objects.
+        """Add the collision meshes of a URDF arm as ``"<arm>/mesh/<link>"`` BVH objects.
 
         The meshes themselves, not the capsules fitted around them
         (:attr:`workcell.arms.urdf.UrdfArm.meshes`): an independent check of
@@ -422,7 +422,7 @@ class CollisionWorld:
         grp = f"{arm.name}/meshes" if group is None else group
         qq = np.asarray(arm.home if q is None else q, dtype=float)
         tfs = arm.mesh_transforms(qq[None, :])[0]
-        names = tuple(f"{arm.name}/{m.name}" for m in arm.meshes)
+        names = tuple(f"{arm.name}/mesh/{m.name}" for m in arm.meshes)
         for name, mesh, t in zip(names, arm.meshes, tfs, strict=True):
             self.add_mesh(name, mesh.vertices, mesh.faces, grp, t)
         for i, a in enumerate(arm.meshes):
