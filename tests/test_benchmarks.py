@@ -30,6 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_network",
         "bench_sweep",
         "bench_small",
+        "bench_urdf",
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
