@@ -40,7 +40,9 @@ Nothing is downloaded.
 
 Examples
 --------
->>> arm = UrdfArm("ur", UR5, tool_link="tool0")  # doctest: +SKIP
+>>> arm = UrdfArm("ur", UR5, tool_link="tool0")
+>>> arm.dof, arm.joint_names[0], arm.kind
+(6, 'shoulder_pan_joint', 'urdf')
 """
 
 from __future__ import annotations
