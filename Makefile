@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml constraints.txt
 		|| { echo "multiarm needs Python >= 3.11: run 'make PYTHON=python3.11 ...'"; exit 1; }
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check \
-		-c constraints.txt -e ".[analysis,dev,docs]"
+		-c constraints.txt -e ".[analysis,dev,docs,urdf]"
 	@touch $(STAMP)
 
 demo: $(STAMP)
@@ -41,7 +41,7 @@ docs: $(STAMP)
 lock:
 	rm -rf .lock-venv
 	$(PYTHON) -m venv .lock-venv
-	.lock-venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[analysis,dev,docs]"
+	.lock-venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[analysis,dev,docs,urdf]"
 	{ echo "# Lock file: exact versions for every install (make demo/test use it)."; \
 	  echo "# Regenerate with 'make lock' after changing pyproject.toml."; \
 	  .lock-venv/bin/python -m pip freeze --exclude-editable --all \

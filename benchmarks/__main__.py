@@ -18,6 +18,7 @@ from benchmarks import (
     bench_simkernel,
     bench_small,
     bench_sweep,
+    bench_urdf,
     bench_zones,
 )
 
@@ -30,6 +31,7 @@ def main() -> None:
         bench_zones,
         bench_geometry,
         bench_cells,
+        bench_urdf,
         bench_resolve,
         bench_sim,
         bench_simkernel,

@@ -31,6 +31,7 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_sweep",
         "bench_small",
         "bench_grid",
+        "bench_urdf",
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:

@@ -67,7 +67,7 @@ from workcell.compiled import SPACE_GRID
 from zones import ZoneMap, load_sdl
 from zones import examples as zone_examples
 
-__all__ = ["EXAMPLES", "Cell", "cell_from_dict", "load_cell", "load_example"]
+__all__ = ["EXAMPLES", "URDF_EXAMPLES", "Cell", "cell_from_dict", "load_cell", "load_example"]
 
 PlanWith = Literal["nominal", "worst"]
 Park = Literal["home", "last"]
@@ -75,6 +75,9 @@ Releases = Literal["expected", "sample", "none"]
 
 EXAMPLES: tuple[str, ...] = ("supersigma", "scara4", "cell8")
 """Names of the built-in cells (:func:`load_example`)."""
+
+URDF_EXAMPLES: tuple[str, ...] = ("urdf_cell",)
+"""Built-in cells whose arms are read from URDF files (the ``urdf`` extra)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -393,7 +396,7 @@ def cell_from_dict(
             raise _fail(where, f"expected a table, got {spec!r}")
         spec = dict(spec)
         start = spec.pop("start", None)
-        arm = arm_from_dict(str(arm_name), spec, where)
+        arm = arm_from_dict(str(arm_name), spec, where, base_dir=base_dir)
         if start is None:
             q = np.array(arm.home, dtype=float)
         else:
@@ -455,7 +458,8 @@ def _example_text(name: str) -> str:
 
 
 def load_example(name: str) -> Cell:
-    """The built-in cell ``name``: ``"supersigma"``, ``"scara4"`` or ``"cell8"``.
+    """The built-in cell ``name``: ``"supersigma"``, ``"scara4"``, ``"cell8"`` or
+    ``"urdf_cell"`` (two UR5 and a Panda from URDF: the ``urdf`` extra).
 
     Read from the package's data, so it works from an installed wheel.
 
@@ -464,7 +468,8 @@ def load_example(name: str) -> Cell:
     >>> load_example("scara4").summary()["arms"]
     4
     """
-    if name not in EXAMPLES:
-        raise ValidationError(f"unknown example cell {name!r} (known: {', '.join(EXAMPLES)})")
+    known = EXAMPLES + URDF_EXAMPLES
+    if name not in known:
+        raise ValidationError(f"unknown example cell {name!r} (known: {', '.join(known)})")
     data = tomllib.loads(_example_text(name))
     return cell_from_dict(data, filename=f"{name}.toml")

@@ -12,13 +12,16 @@
   before the cover goes on).
 * ``"cell8"``: a generated task set of about 200 tasks for the 8-arm scale
   cell (:func:`generate_taskset` with a fixed seed).
+* ``"urdf_cell"``: two products (base plate, pin, screw) assembled on one
+  shared fixture by two UR5 and a Panda read from URDF; written with the
+  procedural API.
 
 Examples
 --------
 >>> load_example("supersigma").summary()["tasks"]
 10
 >>> sorted(EXAMPLES)
-['cell8', 'scara4', 'supersigma']
+['cell8', 'scara4', 'supersigma', 'urdf_cell']
 """
 
 from __future__ import annotations
@@ -33,7 +36,15 @@ from tasklib import capi as c
 from tasklib.arrivals import FixedArrivals, PoissonArrivals, UniformArrivals
 from tasklib.model import TaskSet
 
-__all__ = ["EXAMPLES", "cell8", "generate_taskset", "load_example", "scara4", "supersigma"]
+__all__ = [
+    "EXAMPLES",
+    "cell8",
+    "generate_taskset",
+    "load_example",
+    "scara4",
+    "supersigma",
+    "urdf_cell",
+]
 
 
 def _tdl_text(name: str) -> str:
@@ -461,10 +472,93 @@ def cell8() -> TaskSet:
     return generate_taskset(200, seed=8, name="cell8", sites=CELL8_SITES)
 
 
+def urdf_cell(n_products: int = 2) -> TaskSet:
+    """Two UR5 and a Panda (URDF arms) assembling ``n_products`` products on one fixture.
+
+    Per product: a base plate comes on the conveyor and is placed in the
+    fixture, a pin from the tray is inserted under force search (S1.7), a
+    screw is driven with the one screwdriver, and the finished product goes
+    back onto the conveyor. The fixture holds one product at a time.
+    """
+    if n_products < 1:
+        raise ValidationError(f"urdf_cell needs n_products >= 1, got {n_products}")
+    ts = c.taskset_open(
+        "urdf_cell",
+        f"Two UR5 and a Panda assembling {n_products} product(s) on a shared fixture.",
+    )
+    bases = [f"base{k}" for k in range(1, n_products + 1)]
+    pins = [f"pin{k}" for k in range(1, n_products + 1)]
+    c.feeder_add(
+        ts, "conveyor_in", bases, (-0.3, 0.55, 0.02), FixedArrivals(tuple((b, 0.0) for b in bases))
+    )
+    c.feeder_add(ts, "pin_tray", pins, (0.32, -0.4, 0.02), FixedArrivals(()), 0.0005)
+    fixture = (0.0, 0.0, 0.08)
+    out = (0.3, 0.55, 0.06)
+    previous: str | None = None
+    for k in range(1, n_products + 1):
+        base, pin, done = f"base{k}", f"pin{k}", f"product{k}"
+        c.part_add(ts, base)
+        c.part_add(ts, pin, [base])
+        c.part_add(ts, f"screw{k}")
+        c.part_add(ts, done)
+
+        t = c.task_open(ts, f"place_base{k}", part=base)
+        if previous is not None:
+            c.task_require(t, previous)  # the fixture holds one product
+        c.task_consume(t, base)
+        c.task_move(t, (-0.3, 0.55, 0.2, *DOWN))
+        c.task_approach(t, (-0.3, 0.55, 0.04, *DOWN), 0.15)
+        c.task_grasp(t, base)
+        c.task_depart(t, 0.15)
+        c.task_move(t, (0.0, 0.0, 0.25, *DOWN))
+        c.task_approach(t, (*fixture, *DOWN), 0.15)
+        c.task_release(t, base)
+        c.task_actuate(t, "fixture_clamp", "close", 0.5)
+        c.task_depart(t, 0.15)
+        c.task_close(t)
+
+        t = c.task_open(ts, f"insert_pin{k}", ["force_sensor"], part=pin)
+        c.task_consume(t, pin)
+        c.task_move(t, (0.32, -0.4, 0.2, *DOWN))
+        c.task_approach(t, (0.32, -0.4, 0.04, *DOWN), 0.14)
+        c.task_grasp(t, pin)
+        c.task_depart(t, 0.14)
+        c.task_move(t, (0.0, 0.0, 0.28, *DOWN))
+        c.task_insert(t, pin, (0.0, 0.0, 0.14, *DOWN), depth=0.03, max_tries=9, step=0.0005)
+        c.task_release(t, pin)
+        c.task_depart(t, 0.12)
+        c.task_close(t)
+
+        t = c.task_open(ts, f"screw{k}", tool="screwdriver")
+        c.task_require(t, f"insert_pin{k}")
+        c.task_move(t, (0.04, 0.0, 0.25, *DOWN))
+        c.task_approach(t, (0.04, 0.0, 0.12, *DOWN), 0.1)
+        c.task_use_tool(t, "screwdriver", 1.5)
+        c.task_depart(t, 0.1)
+        c.task_close(t)
+
+        t = c.task_open(ts, f"unload{k}")
+        c.task_require(t, f"screw{k}")
+        c.task_produce(t, done)
+        c.task_actuate(t, "fixture_clamp", "open", 0.5)
+        c.task_move(t, (0.0, 0.0, 0.25, *DOWN))
+        c.task_approach(t, (*fixture, *DOWN), 0.15)
+        c.task_grasp(t, None, 0.3)
+        c.task_depart(t, 0.15)
+        c.task_move(t, (out[0], out[1], 0.22, *DOWN))
+        c.task_approach(t, (*out, *DOWN), 0.12)
+        c.task_release(t)
+        c.task_depart(t, 0.12)
+        c.task_close(t)
+        previous = f"unload{k}"
+    return c.taskset_close(ts)
+
+
 EXAMPLES: dict[str, Callable[[], TaskSet]] = {
     "supersigma": supersigma,
     "scara4": scara4,
     "cell8": cell8,
+    "urdf_cell": urdf_cell,
 }
 
 

@@ -307,7 +307,7 @@ def test_arm_from_dict_builds_each_type() -> None:
     [
         (
             {"type": "robot"},
-            r"c\.toml: arms\.a\.type: expected one of gantry, scara, serial, got 'robot'",
+            r"c\.toml: arms\.a\.type: expected one of gantry, scara, serial, urdf, got 'robot'",
         ),
         (
             {"type": "scara", "link_lengths": "abc"},

@@ -15,6 +15,15 @@ coordinates within 100 m, speeds, accelerations, rates and masses within
     [arms.left.stepper]
     curve = "loaded"
 
+``urdf`` (a robot description file, :mod:`workcell.arms.urdf`)::
+
+    urdf = "package:example-robot-data/robots/ur_description/urdf/ur5_robot.urdf"
+                                     # or a path, relative to the cell file
+    tool_link = "tool0"              # the link whose frame is the flange
+    joint_limits = [[lo, hi], ...]   # optional: narrower than the URDF's
+    velocity_scale = 0.5             # optional: fraction of the URDF's velocity limits
+    max_acceleration = [...]         # optional (default: 5/s times the velocity limits)
+
 Every error is a :class:`~multiarm.errors.ValidationError` whose message
 starts with ``where`` and the field (``cell.toml: arms.left.rails.x:
 expected 2 numbers, got 'abc'``); an unknown key is an error naming it.
@@ -35,6 +44,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -45,10 +55,11 @@ from workcell.arms.gantry import CartesianGantry
 from workcell.arms.profiles import StepperDrive
 from workcell.arms.scara import Scara
 from workcell.arms.serial import SerialArm
+from workcell.arms.urdf import UrdfArm
 
 __all__ = ["ARM_KEYS", "ARM_TYPES", "ArmKey", "arm_from_dict", "arm_keys_markdown"]
 
-ARM_TYPES = ("gantry", "scara", "serial")
+ARM_TYPES = ("gantry", "scara", "serial", "urdf")
 
 MAX_LENGTH = 100.0
 """Largest length or coordinate in a cell, metres (and largest angle, radians)."""
@@ -101,7 +112,9 @@ def _num(v: float) -> str:
 _L, _P = MAX_LENGTH, (SMALL, LARGE)
 ARM_KEYS: dict[str, tuple[ArmKey, ...]] = {
     "common": (
-        ArmKey("type", "", "required", "the arm kind", allowed='"gantry", "scara", "serial"'),
+        ArmKey(
+            "type", "", "required", "the arm kind", allowed='"gantry", "scara", "serial", "urdf"'
+        ),
         ArmKey(
             "base",
             "m, m, m, rad",
@@ -327,6 +340,38 @@ ARM_KEYS: dict[str, tuple[ArmKey, ...]] = {
         ),
         ArmKey("radius", "m", "0.05", "radius of the link capsules", SMALL, _L),
     ),
+    "urdf": (
+        ArmKey(
+            "urdf",
+            "",
+            "required",
+            "the robot description: a path (relative to the cell file) or "
+            '"package:example-robot-data/robots/..." (workcell.arms.urdf)',
+            allowed="a URDF file",
+        ),
+        ArmKey(
+            "tool_link", "", "required", "the link whose frame is the flange", allowed="a link name"
+        ),
+        ArmKey(
+            "joint_limits",
+            "rad or m",
+            "the URDF's",
+            "one [lo, hi] pair a joint, narrower than the URDF's",
+            -_L,
+            _L,
+            "lo < hi",
+        ),
+        ArmKey(
+            "velocity_scale", "", "1.0", "fraction of the URDF's velocity limits used", SMALL, 1.0
+        ),
+        ArmKey(
+            "max_acceleration",
+            "rad/s^2 or m/s^2",
+            "5/s x the velocity limits",
+            "acceleration limit of each joint",
+            *_P,
+        ),
+    ),
 }
 """Every key of an ``[arms.NAME]`` table, per section: ``"common"`` (every
 kind), ``"gantry"``, ``"gantry.stepper"``, ``"scara"``, ``"serial"``. The
@@ -339,6 +384,8 @@ HOMES: dict[str, str] = {
     "to the left, so the hand stands at (l1, l2) in the base frame (0.45 m ahead, 0.4 m to the "
     "left with the default links), raised: it reaches across the table, so a SCARA next to other "
     "arms needs a start that points away from them",
+    "urdf": "all joints 0, or the middle of a joint's limits when 0 is outside them (the URDF's "
+    "zero pose)",
     "serial": "all joints 0 (6dof: [0, 0.3, 0.9, 0, 1.2, 0], the hand in front of the base, "
     "pointing down)",
 }
@@ -361,6 +408,7 @@ def arm_keys_markdown() -> str:
         "gantry.stepper": "`[arms.NAME.stepper]` (gantry)",
         "scara": '`type = "scara"`',
         "serial": '`type = "serial"`',
+        "urdf": '`type = "urdf"`',
     }
     out: list[str] = []
     for section, keys in ARM_KEYS.items():
@@ -516,7 +564,45 @@ def _stepper(data: Any, where: str) -> StepperDrive:
     return drive
 
 
-def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
+def _urdf_arm(
+    name: str, data: Mapping[str, Any], f: _Fields, common: dict[str, Any], base_dir: Path | None
+) -> UrdfArm:
+    for key in ("urdf", "tool_link"):
+        v = data.get(key)
+        if not isinstance(v, str) or not v:
+            raise f.fail(key, f"expected a non-empty string, got {v!r}")
+    kw: dict[str, Any] = {}
+    if (jl := f.pairs("joint_limits")) is not None:
+        kw["joint_limits"] = jl
+    if (vs := f.number("velocity_scale", positive=True)) is not None:
+        if vs > 1:
+            raise f.fail("velocity_scale", f"must be in (0, 1], got {vs!r}")
+        kw["velocity_scale"] = vs
+    if (acc := f.numbers("max_acceleration", positive=True)) is not None:
+        kw["max_acceleration"] = acc
+    try:
+        return UrdfArm(
+            name,
+            data["urdf"],
+            tool_link=data["tool_link"],
+            base_dir=base_dir,
+            **kw,
+            **common,
+        )
+    except ValidationError as exc:
+        # name the field: a file problem is the urdf's, a count the field's
+        msg = str(exc)
+        if "for tool_link" in msg:
+            raise f.fail("tool_link", msg) from None
+        for key in ("joint_limits", "max_acceleration", "home"):
+            if key in msg:
+                raise f.fail(key, msg) from None
+        raise f.fail("urdf", msg) from None
+
+
+def arm_from_dict(
+    name: str, data: Mapping[str, Any], where: str, *, base_dir: Path | None = None
+) -> DriveArm:
     """Build an arm from a cell file's ``[arms.NAME]`` table (module docstring).
 
     Parameters
@@ -527,10 +613,12 @@ def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
         The table's content.
     where : str
         Prefix of every error message (the file and the table's path).
+    base_dir : Path, optional
+        Directory a relative ``urdf`` path is relative to (the cell file's).
 
     Returns
     -------
-    CartesianGantry, Scara or SerialArm
+    CartesianGantry, Scara, SerialArm or UrdfArm
 
     Raises
     ------
@@ -610,6 +698,8 @@ def arm_from_dict(name: str, data: Mapping[str, Any], where: str) -> DriveArm:
             if (r := f.number("radius", positive=True)) is not None:
                 kw["radius"] = r
             return Scara(name, **kw, **common)
+        if kind == "urdf":
+            return _urdf_arm(name, data, f, common, base_dir)
         kw = {}
         example = data.get("example")
         if example is not None:

@@ -45,17 +45,26 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import fcl
 import numpy as np
 
 from multiarm.errors import UsageError, ValidationError
-from multiarm.types import FloatArray, Transform
+from multiarm.types import FloatArray, IntArray, Transform
 from workcell.arms.base import Arm, LinkShape
 from zones.geometry import Primitive
 
-__all__ = ["CollisionReport", "CollisionWorld", "link_geometry", "primitive_geometry"]
+if TYPE_CHECKING:
+    from workcell.arms.urdf import UrdfArm
+
+__all__ = [
+    "CollisionReport",
+    "CollisionWorld",
+    "link_geometry",
+    "mesh_geometry",
+    "primitive_geometry",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,6 +182,47 @@ def primitive_geometry(prim: Primitive) -> Any:
         bvh.endModel()
         return bvh
     raise ValidationError(f"unknown primitive kind {prim.kind!r}")
+
+
+def mesh_geometry(vertices: FloatArray, faces: IntArray, name: str = "mesh") -> Any:
+    """An FCL bounding-volume hierarchy (``BVHModel``, OBB-RSS) of a triangle mesh.
+
+    Its *surface* collides: a shape entirely inside a closed mesh does not.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float
+    faces : (F, 3) int
+        Vertex indices.
+    name : str
+        Named in errors.
+
+    Raises
+    ------
+    multiarm.errors.ValidationError
+        For empty, non-finite or out-of-range data.
+    """
+    v = np.ascontiguousarray(vertices, dtype=np.float64)
+    f = np.ascontiguousarray(faces, dtype=np.int64)
+    if (
+        v.ndim != 2
+        or v.shape[1:] != (3,)
+        or f.ndim != 2
+        or f.shape[1:] != (3,)
+        or len(v) == 0
+        or len(f) == 0
+        or not np.all(np.isfinite(v))
+        or f.min() < 0
+        or f.max() >= len(v)
+    ):
+        raise ValidationError(
+            f"mesh {name!r}: needs finite (V, 3) vertices and (F, 3) faces indexing them"
+        )
+    bvh = fcl.BVHModel()
+    bvh.beginModel(len(v), len(f))
+    bvh.addSubModel(v, f)
+    bvh.endModel()
+    return bvh
 
 
 def _fcl_transform(t: FloatArray) -> Any:
@@ -326,6 +376,59 @@ class CollisionWorld:
         for pair in arm.allowed_pairs:
             a, b = sorted(pair)
             self.allow(f"{arm.name}/{a}", f"{arm.name}/{b}")
+        return names
+
+    def add_mesh(
+        self,
+        name: str,
+        vertices: FloatArray,
+        faces: IntArray,
+        group: str,
+        transform: FloatArray | None = None,
+    ) -> None:
+        """Add a triangle mesh as an FCL BVH object (:func:`mesh_geometry`).
+
+        Raises
+        ------
+        multiarm.errors.ValidationError
+            On a duplicate name or bad mesh data.
+        """
+        self._add(name, mesh_geometry(vertices, faces, name), group, transform)
+
+    def add_arm_meshes(
+        self, arm: UrdfArm, group: str | None = None, q: FloatArray | None = None
+    ) -> tuple[str, ...]:
+        """Add the collision meshes of a URDF arm as ``"<arm>/mesh/<link>"`` BVH objects.
+
+        The meshes themselves, not the capsules fitted around them
+        (:attr:`workcell.arms.urdf.UrdfArm.meshes`): an independent check of
+        the capsule sweep. Move them with :meth:`set_group_transforms` and
+        ``arm.mesh_transforms(q)``. Pairs of meshes on the same or adjacent
+        frames are allowed (never reported), like the arm's shapes.
+
+        Parameters
+        ----------
+        arm : UrdfArm
+        group : str, optional
+            Default: ``"<arm>/meshes"``.
+        q : (dof,) float, optional
+            Initial joint vector (default ``arm.home``).
+
+        Returns
+        -------
+        tuple of str
+            The object names, in the order of ``arm.meshes``.
+        """
+        grp = f"{arm.name}/meshes" if group is None else group
+        qq = np.asarray(arm.home if q is None else q, dtype=float)
+        tfs = arm.mesh_transforms(qq[None, :])[0]
+        names = tuple(f"{arm.name}/mesh/{m.name}" for m in arm.meshes)
+        for name, mesh, t in zip(names, arm.meshes, tfs, strict=True):
+            self.add_mesh(name, mesh.vertices, mesh.faces, grp, t)
+        for i, a in enumerate(arm.meshes):
+            for j in range(i + 1, len(arm.meshes)):
+                if abs(a.frame - arm.meshes[j].frame) <= 1:
+                    self.allow(names[i], names[j])
         return names
 
     def allow(self, a: str, b: str) -> None:

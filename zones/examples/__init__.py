@@ -4,7 +4,9 @@
   subzone walls, exclusive feeders, the screwdriver rack over the fixture);
 * ``"scara4"``: four SCARA arms around a shared central assembly zone;
 * ``"cell8"``: the 8-arm scale cell (12 active zones of both policies, walls,
-  a union, three tools, two phases; 11 zones active at start).
+  a union, three tools, two phases; 11 zones active at start);
+* ``"urdf_cell"``: two UR5 and a Panda around a shared fixture, with a
+  conveyor, a pin tray and a tool rack.
 
 Examples
 --------
@@ -22,7 +24,7 @@ from zones.sdl import parse_sdl
 
 __all__ = ["EXAMPLES", "example_path", "load_example"]
 
-EXAMPLES = ("supersigma", "scara4", "cell8")
+EXAMPLES = ("supersigma", "scara4", "cell8", "urdf_cell")
 
 
 def example_path(name: str) -> str:
