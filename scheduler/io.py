@@ -30,7 +30,7 @@ from typing import Any, Literal
 import numpy as np
 
 from multiarm.errors import FormatError, ValidationError
-from multiarm.text import read_source
+from multiarm.text import parse_json, read_source
 from scheduler.problem import BlockingOracle, Model, Problem, Window
 from scheduler.schedule import Schedule
 
@@ -369,12 +369,7 @@ def load_schedule(path: str | PathLike[str], problem: Problem) -> Schedule:
 def _read_json(path: str | PathLike[str], what: str) -> Any:
     name = fspath(path)
     text = read_source(path, FormatError, what)
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise FormatError(exc.msg, filename=name, line=exc.lineno, column=exc.colno) from None
-    except RecursionError:
-        raise FormatError(f"{what} file is nested too deeply", filename=name) from None
+    return parse_json(text, name, FormatError, f"{what} file")
 
 
 FileKind = Literal["problem", "schedule", "fjsp"]

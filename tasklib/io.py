@@ -34,7 +34,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import tomllib
 import types
 import typing
 from collections.abc import Mapping
@@ -46,6 +45,7 @@ from typing import Any, Literal, Union, get_args, get_origin
 import tomli_w
 
 from multiarm.errors import FormatError, SourceError, ValidationError
+from multiarm.text import parse_json, parse_toml
 from tasklib.arrivals import ARRIVAL_MODELS, Feeder
 from tasklib.model import Part, PartGroup, Task, TaskSet
 from tasklib.pose import Pose
@@ -318,12 +318,8 @@ def load_taskset(path: str | PathLike[str]) -> TaskSet:
         raise FormatError(
             f"task-set file is not UTF-8 text ({exc.reason})", filename=name
         ) from None
-    try:
-        data = json.loads(text) if kind == "json" else tomllib.loads(text)
-    except json.JSONDecodeError as exc:
-        raise FormatError(exc.msg, filename=name, line=exc.lineno, column=exc.colno) from None
-    except tomllib.TOMLDecodeError as exc:
-        raise FormatError(f"TOML syntax error: {exc}", filename=name) from None
+    parse = parse_json if kind == "json" else parse_toml
+    data = parse(text, name, FormatError, "task-set file")
     try:
         return taskset_from_dict(data, filename=name)
     except SourceError:

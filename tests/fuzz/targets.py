@@ -340,6 +340,14 @@ TARGETS: dict[str, Target | _Harness] = {
 TARGETS["compile"] = _Harness("compile", _compile_target)
 
 KNOWN_FOREIGN: dict[str, tuple[str, ...]] = {
+    # workcell/cell.py load_cell: tomllib's RecursionError and the ValueError of
+    # an integer of more than 4300 digits escape (multiarm.text.parse_toml
+    # converts both)
+    "cell": ("int-too-many-digits.toml", "recursion-deep-array.toml"),
+    # the --faults reader (workcell/cli.py _load_faults): the same two, for TOML and JSON
+    "faults_json": ("int-too-many-digits.json", "recursion-deep-array.json"),
+    "faults_toml": ("int-too-many-digits.toml", "recursion-deep-array.toml"),
+    # compile.padding = 1.7e-313 passes "0 < padding <= 0.1" and runs out of memory
     "compile": ("oom-padding-denormal.bin",),
 }
 """Reproducers (file names under ``crashes/<target>/``) of findings outside the

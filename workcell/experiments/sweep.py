@@ -103,7 +103,6 @@ import math
 import os
 import re
 import time
-import tomllib
 import traceback
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields
@@ -113,7 +112,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from multiarm.errors import FormatError, MultiarmError, UsageError, ValidationError
-from multiarm.text import read_source
+from multiarm.text import parse_toml, read_source
 
 if TYPE_CHECKING:
     from scheduler import Problem, Result
@@ -135,7 +134,6 @@ __all__ = [
 
 InstanceKind = Literal["fjsp", "generated", "cell", "benchmark"]
 
-_TOML_POS = re.compile(r"\(at line (\d+), column (\d+)\)")
 _SWEEP_KEYS = {"name", "description", "out", "repetitions", "workers"}
 _QUICK_KEYS = {"instances", "solvers", "time_limit", "params", "repetitions"}
 _INSTANCE_KEYS = {
@@ -527,19 +525,7 @@ def parse_sweep(text: str, filename: str | None = None, base_dir: Path | None = 
         A field is wrong (``file: field.path: message``).
     """
     fname = filename or "<string>"
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        msg = str(exc)
-        m = _TOML_POS.search(msg)
-        line = int(m.group(1)) if m else None
-        col = int(m.group(2)) if m else None
-        raise FormatError(
-            f"TOML syntax error: {_TOML_POS.sub('', msg).strip()}",
-            filename=fname,
-            line=line,
-            column=col,
-        ) from None
+    data = parse_toml(text, fname, FormatError, "sweep file")
     return sweep_from_dict(data, filename=fname, base_dir=base_dir)
 
 

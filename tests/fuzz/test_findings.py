@@ -1,0 +1,66 @@
+"""Regression tests of the fuzzers' findings: each reproducer under
+``tests/fuzz/crashes/`` loads through the real loader into an error of ours
+that names the file and says what is wrong."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from multiarm.errors import FormatError, SDLSyntaxError, SourceError
+from scheduler.io import load_problem, load_schedule
+from tasklib import load_taskset
+from tests.fuzz.targets import HERE, schedule_problem
+from workcell.experiments.sweep import load_sweep
+from zones import load_sdl
+
+CRASHES = HERE / "crashes"
+
+CASES = [
+    ("taskset_json/recursion-deep-array.json", load_taskset, FormatError, "nested too deeply"),
+    ("taskset_json/int-too-many-digits.json", load_taskset, FormatError, "too many digits"),
+    ("taskset_toml/recursion-deep-array.toml", load_taskset, FormatError, "nested too deeply"),
+    (
+        "taskset_toml/recursion-deep-inline-table.toml",
+        load_taskset,
+        FormatError,
+        "nested too deeply",
+    ),
+    ("taskset_toml/int-too-many-digits.toml", load_taskset, FormatError, "too many digits"),
+    ("problem/int-too-many-digits.json", load_problem, FormatError, "too many digits"),
+    (
+        "schedule/int-too-many-digits.json",
+        lambda p: load_schedule(p, schedule_problem()),
+        FormatError,
+        "too many digits",
+    ),
+    ("sweep/recursion-deep-array.toml", load_sweep, FormatError, "nested too deeply"),
+    ("sweep/int-too-many-digits.toml", load_sweep, FormatError, "too many digits"),
+    ("sdl/recursion-deep-union.sdl", load_sdl, SDLSyntaxError, "nested too deeply"),
+]
+
+
+@pytest.mark.parametrize(("name", "load", "error", "words"), CASES, ids=[c[0] for c in CASES])
+def test_finding_is_refused_by_name(
+    name: str, load: object, error: type[SourceError], words: str, tmp_path: Path
+) -> None:
+    path = tmp_path / Path(name).name
+    shutil.copyfile(CRASHES / name, path)
+    with pytest.raises(error) as info:
+        load(path)  # type: ignore[operator]
+    assert info.value.filename == str(path)
+    assert str(info.value).startswith(f"{path}")
+    assert words in str(info.value)
+
+
+def test_every_fixed_reproducer_has_a_regression_case() -> None:
+    from tests.fuzz.targets import KNOWN_FOREIGN
+
+    covered = {c[0] for c in CASES}
+    for folder in CRASHES.iterdir():
+        for f in folder.iterdir():
+            key = f"{folder.name}/{f.name}"
+            if f.name not in KNOWN_FOREIGN.get(folder.name, ()):
+                assert key in covered, f"{key}: a fixed finding without a regression case"
