@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from multiarm.errors import FormatError, SDLSyntaxError, SourceError
+from multiarm.errors import FormatError, SDLError, SDLSyntaxError, SourceError
 from scheduler.io import load_problem, load_schedule
 from tasklib import load_taskset
 from tests.fuzz.targets import HERE, schedule_problem
@@ -39,6 +39,7 @@ CASES = [
     ("sweep/recursion-deep-array.toml", load_sweep, FormatError, "nested too deeply"),
     ("sweep/int-too-many-digits.toml", load_sweep, FormatError, "too many digits"),
     ("sdl/recursion-deep-union.sdl", load_sdl, SDLSyntaxError, "nested too deeply"),
+    ("sdl/wall-normal-overflow.sdl", load_sdl, SDLError, "too long to normalise"),
 ]
 
 
@@ -52,6 +53,8 @@ def test_finding_is_refused_by_name(
         load(path)  # type: ignore[operator]
     assert info.value.filename == str(path)
     assert str(info.value).startswith(f"{path}")
+    if name.endswith("wall-normal-overflow.sdl"):
+        assert (info.value.line, info.value.column) == (2, 1)
     assert words in str(info.value)
 
 
