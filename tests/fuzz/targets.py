@@ -43,6 +43,7 @@ __all__ = [
     "Unlocated",
     "check",
     "compile_mutations",
+    "compile_tasks_file",
     "seed_files",
 ]
 
@@ -246,19 +247,25 @@ def compile_mutations(data: bytes) -> list[tuple[tuple[str, ...], float]]:
     return out
 
 
-@functools.cache
-def _compile_base(workdir: Path) -> tuple[dict[str, Any], Path]:
-    """The supersigma cell's data with a 2-task set written into ``workdir``."""
+def compile_tasks_file(folder: Path) -> Path:
+    """Writes (once per folder) the 2-task set the compile harnesses use: the
+    first two tasks of the supersigma set without prerequisites or parts."""
     from tasklib import load_example, save_taskset
 
+    tasks = folder / "tiny_tasks.json"
+    if not tasks.is_file():
+        full = load_example("supersigma")
+        keep = tuple(t for t in full.tasks if not t.prerequisites and not t.consumes)[:2]
+        save_taskset(dataclasses.replace(full, tasks=keep, groups=()), tasks)
+    return tasks
+
+
+@functools.cache
+def _compile_base(workdir: Path) -> tuple[dict[str, Any], Path]:
+    """The supersigma cell's data with the 2-task set written into ``workdir``."""
     text = resources.files("workcell.examples").joinpath("supersigma.toml").read_text("utf-8")
     data = tomllib.loads(text)
-    full = load_example("supersigma")
-    keep = tuple(t for t in full.tasks if not t.prerequisites and not t.consumes)[:2]
-    tiny = dataclasses.replace(full, tasks=keep, groups=())
-    tasks = workdir / "tiny_tasks.json"
-    save_taskset(tiny, tasks)
-    data["tasks"] = tasks.name
+    data["tasks"] = compile_tasks_file(workdir).name
     return data, workdir
 
 
