@@ -178,17 +178,27 @@ def problem_from_dict(
             start_zones=r.names(at.get("start_zones", []), f"{w}.start_zones"),
         )
     tasks = r.items(top["tasks"], "tasks")
+    # names are resolved to ids here (the first of a duplicate name, as the
+    # model does), so that building stays linear in the number of tasks;
+    # unknown names go to the model as names, which refuses them by name
+    task_id: dict[str, int] = {}
+    arm_id: dict[str, int] = {}
+    for i, a in enumerate(top["arms"]):
+        arm_id.setdefault(a["name"], i)
     for i, t in enumerate(tasks):
         w = f"tasks[{i}]"
         tt = r.table(t, w, _TASK, {"name"})
+        name = r.name(tt["name"], f"{w}.name")
+        task_id.setdefault(name, i)
         m.add_task(
-            r.name(tt["name"], f"{w}.name"),
+            name,
             release=r.number(tt.get("release", 0.0), f"{w}.release"),
             group=r.integer(tt.get("group", -1), f"{w}.group"),
         )
     for i, tt in enumerate(tasks):
         w = f"tasks[{i}]"
-        m.add_predecessors(tt["name"], r.names(tt.get("predecessors", []), f"{w}.predecessors"))
+        preds = r.names(tt.get("predecessors", []), f"{w}.predecessors")
+        m.add_predecessors(i, [task_id.get(p, p) for p in preds])
         for j, md in enumerate(r.items(tt.get("modes", []), f"{w}.modes")):
             wm = f"{w}.modes[{j}]"
             mt = r.table(md, wm, _MODE, {"arm", "duration"})
@@ -207,9 +217,10 @@ def problem_from_dict(
                         kind,
                     )
                 )
+            arm = r.name(mt["arm"], f"{wm}.arm")
             m.add_mode(
-                tt["name"],
-                r.name(mt["arm"], f"{wm}.arm"),
+                i,
+                arm_id.get(arm, arm),
                 r.number(mt["duration"], f"{wm}.duration"),
                 windows=windows,
                 tools=r.names(mt.get("tools", []), f"{wm}.tools"),
