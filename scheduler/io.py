@@ -124,13 +124,43 @@ def _setup(r: _Reader, value: Any) -> dict[str, Any]:
     if kind == "matrix":
         times = r.items(s.get("times"), "setup.times")
         for a, rows in enumerate(times):
+            width = None
             for i, row in enumerate(r.items(rows, f"setup.times[{a}]")):
-                for j, v in enumerate(r.items(row, f"setup.times[{a}][{i}]")):
+                items = r.items(row, f"setup.times[{a}][{i}]")
+                for j, v in enumerate(items):
                     r.number(v, f"setup.times[{a}][{i}][{j}]")
+                if width is not None and len(items) != width:
+                    raise r.fail(
+                        f"setup.times[{a}][{i}]",
+                        f"expected {width} values like the rows before, got {len(items)}",
+                    )
+                width = len(items)
+        shapes = {
+            (len(rows), len(rows[0]) if rows else 0) for rows in times if isinstance(rows, list)
+        }
+        if len(shapes) > 1:
+            raise r.fail("setup.times", "every arm's table must have the same shape")
     if kind == "travel":
         for key in ("start", "end", "home", "speed", "base"):
             if key not in s:
                 raise r.fail("setup", f"missing key {key!r}")
+        for key in ("start", "end", "home"):
+            for i, point in enumerate(r.items(s[key], f"setup.{key}")):
+                xyz = r.items(point, f"setup.{key}[{i}]")
+                if len(xyz) != 3:
+                    raise r.fail(f"setup.{key}[{i}]", f"expected [x, y, z], got {len(xyz)} values")
+                for j, v in enumerate(xyz):
+                    r.number(v, f"setup.{key}[{i}][{j}]")
+        for key in ("speed", "base"):
+            if isinstance(s[key], list):
+                for i, v in enumerate(s[key]):
+                    r.number(v, f"setup.{key}[{i}]")
+            else:
+                r.number(s[key], f"setup.{key}")
+        if "metric" in s and s["metric"] not in ("euclidean", "manhattan"):
+            raise r.fail(
+                "setup.metric", f"expected 'euclidean' or 'manhattan', got {_show(s['metric'])}"
+            )
     return dict(s)
 
 

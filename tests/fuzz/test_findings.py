@@ -31,6 +31,12 @@ CASES = [
     ("taskset_toml/int-too-many-digits.toml", load_taskset, FormatError, "too many digits"),
     ("problem/int-too-many-digits.json", load_problem, FormatError, "too many digits"),
     (
+        "problem/setup-ragged-points.json",
+        load_problem,
+        FormatError,
+        "setup.end[1]: expected [x, y, z]",
+    ),
+    (
         "schedule/int-too-many-digits.json",
         lambda p: load_schedule(p, schedule_problem()),
         FormatError,
@@ -116,3 +122,43 @@ def test_problem_file_names_still_resolve_to_the_right_tasks_and_arms() -> None:
     bad["tasks"][1]["predecessors"] = ["nope"]  # type: ignore[index]
     with pytest.raises(ValidationError, match="nope"):
         problem_from_dict(bad, filename="p.json")
+
+
+@pytest.mark.parametrize(
+    ("setup", "words"),
+    [
+        (
+            {"kind": "matrix", "times": [[[0, 1], [1]]]},
+            r"setup\.times\[0\]\[1\]: expected 2 values",
+        ),
+        ({"kind": "matrix", "times": [[[0]], [[0, 1], [1, 0]]]}, "same shape"),
+        (
+            {"kind": "travel", "start": [[0, 0]], "end": [], "home": [], "speed": 1, "base": 0},
+            r"setup\.start\[0\]: expected \[x, y, z\]",
+        ),
+        (
+            {"kind": "travel", "start": [], "end": [], "home": [], "speed": [1, "x"], "base": 0},
+            r"setup\.speed\[1\]: expected a number",
+        ),
+        (
+            {
+                "kind": "travel",
+                "start": [],
+                "end": [],
+                "home": [],
+                "speed": 1,
+                "base": 0,
+                "metric": 3,
+            },
+            r"setup\.metric",
+        ),
+    ],
+)
+def test_a_malformed_setup_table_is_refused_by_its_field(
+    setup: dict[str, object], words: str
+) -> None:
+    from scheduler.io import problem_from_dict
+
+    data = _chain_problem(1) | {"setup": setup}
+    with pytest.raises(FormatError, match=words):
+        problem_from_dict(data, filename="p.json")
