@@ -351,9 +351,19 @@ KNOWN_FOREIGN: dict[str, tuple[str, ...]] = {
     # an integer of more than 4300 digits escape (multiarm.text.parse_toml
     # converts both)
     "cell": ("int-too-many-digits.toml", "recursion-deep-array.toml"),
-    # the --faults reader (workcell/cli.py _load_faults): the same two, for TOML and JSON
-    "faults_json": ("int-too-many-digits.json", "recursion-deep-array.json"),
-    "faults_toml": ("int-too-many-digits.toml", "recursion-deep-array.toml"),
+    # the --faults reader (workcell/cli.py _load_faults): the same two, for TOML
+    # and JSON; and a "kind" that is a list or table: TypeError (unhashable) in
+    # workcell/sim/faults.py FaultPlan.from_dicts ("kind not in _KINDS")
+    "faults_json": (
+        "int-too-many-digits.json",
+        "kind-unhashable.json",
+        "recursion-deep-array.json",
+    ),
+    "faults_toml": (
+        "int-too-many-digits.toml",
+        "kind-unhashable.toml",
+        "recursion-deep-array.toml",
+    ),
     # compile.padding = 1.7e-313 passes "0 < padding <= 0.1" and runs out of memory
     "compile": ("oom-padding-denormal.bin",),
 }
