@@ -759,7 +759,7 @@ def _best_known(w: _Where, item: Mapping[str, Any], where: str) -> dict[str, flo
 
 def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> list[InstanceSpec]:
     kind = item.get("kind")
-    if kind not in _INSTANCE_KEYS:
+    if not isinstance(kind, str) or kind not in _INSTANCE_KEYS:
         raise w.fail(
             f"{where}.kind", f"expected one of {', '.join(map(repr, _INSTANCE_KEYS))}, got {kind!r}"
         )
@@ -913,7 +913,7 @@ def _solvers(w: _Where, item: Mapping[str, Any], where: str) -> list[SolverConfi
 
     _unknown(w, item, _SOLVER_KEYS, where)
     solver = item.get("solver")
-    if solver not in REGISTRY:
+    if not isinstance(solver, str) or solver not in REGISTRY:
         raise w.fail(f"{where}.solver", f"expected one of {', '.join(SOLVERS)}, got {solver!r}")
     label = _str(w, item.get("label", solver), f"{where}.label")
     opts = dict(_table(w, item.get("options", {}), f"{where}.options"))
