@@ -30,7 +30,9 @@ def _crash_files() -> list[object]:
         for f in sorted(folder.iterdir()):
             marks = []
             if f.name in KNOWN_FOREIGN.get(folder.name, ()):
-                if f.name.startswith(("oom-", "timeout-")):  # would exhaust memory or time
+                # an out-of-memory or hang would exhaust the run; the compile
+                # harness leaves the pending values out (PENDING_RANGES)
+                if f.name.startswith(("oom-", "timeout-")) or folder.name == "compile":
                     marks.append(pytest.mark.skip(reason="known finding (KNOWN_FOREIGN)"))
                 else:
                     marks.append(
