@@ -19,7 +19,7 @@ from tests.fuzz.targets import HERE, KNOWN_FOREIGN, TARGETS, seed_files
 # Inputs per target in the bounded run: the parsers run hundreds of inputs a
 # second; the compile harness compiles a cell per input.
 BOUNDED_RUNS = {"compile": 20}
-DEFAULT_RUNS = 500
+DEFAULT_RUNS = 300
 
 CRASHES = HERE / "crashes"
 
