@@ -1,7 +1,7 @@
 # The two commands a newcomer needs (README.md):
 #   make demo   create .venv if missing, install with the locked versions, run the demo
 #   make test   same setup, then lint, type-check and run the whole test suite
-# Others: make lock (re-resolve constraints.txt), make bench, make clean.
+# Others: make lock (re-resolve constraints.txt), make bench, make fuzz, make clean.
 
 PYTHON ?= python3
 VENV   := .venv
@@ -9,7 +9,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 PYTEST_ARGS ?=
 
-.PHONY: demo test lint lock bench docs clean
+.PHONY: demo test lint lock bench fuzz docs clean
 
 $(STAMP): pyproject.toml constraints.txt
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' \
@@ -32,6 +32,16 @@ test: lint
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks
+
+# The long fuzz campaign of the parsers (tests/fuzz): FUZZ_RUNS inputs per target,
+# at most FUZZ_TIME seconds each; figures to benchmarks/results/fuzz.{json,md},
+# findings to .fuzz/. The test suite runs a short one (tests/fuzz/test_fuzz.py).
+FUZZ_RUNS ?= 100000
+FUZZ_TIME ?= 3600
+FUZZ_TARGETS ?=
+fuzz: $(STAMP)
+	$(BIN)/python -m tests.fuzz.campaign --runs $(FUZZ_RUNS) --max-time $(FUZZ_TIME) \
+		--targets "$(FUZZ_TARGETS)" --out benchmarks/results/fuzz
 
 # The documentation site (mkdocs.yml) into site/, warnings as errors.
 docs: $(STAMP)

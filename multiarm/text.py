@@ -1,14 +1,20 @@
-"""Helpers shared by the package's small languages (TDL, SDL).
+"""Helpers shared by the package's small languages (TDL, SDL) and data files.
 
 Both languages are parsed with lark; this module turns lark's exceptions into
 ours (with ``filename``, ``line``, ``column`` and readable expected tokens) and
 prints numbers so that parsing the printed text gives back the same float.
+:func:`parse_json` and :func:`parse_toml` do the same for the JSON and TOML
+files (task sets, problems, schedules, sweeps): every way the standard
+library's decoders fail (syntax, nesting too deep for the recursion limit, an
+integer of more than 4300 digits) becomes our error naming the file.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import re
+import tomllib
 from os import PathLike, fspath
 from pathlib import Path
 from typing import Any
@@ -24,7 +30,16 @@ from lark.exceptions import (
 
 from multiarm.errors import ParseError, SourceError
 
-__all__ = ["fmt_float", "meta_location", "parse_text", "quote", "read_source", "unquote"]
+__all__ = [
+    "fmt_float",
+    "meta_location",
+    "parse_json",
+    "parse_text",
+    "parse_toml",
+    "quote",
+    "read_source",
+    "unquote",
+]
 
 
 def fmt_float(value: float) -> str:
@@ -128,7 +143,12 @@ def parse_text(
     except VisitError as exc:
         if isinstance(exc.orig_exc, SourceError):
             raise exc.orig_exc from None
+        if isinstance(exc.orig_exc, RecursionError):
+            raise syntax_error("the text is nested too deeply", filename=filename) from None
         raise
+    except RecursionError:
+        # the tree is transformed recursively: thousands of nested blocks
+        raise syntax_error("the text is nested too deeply", filename=filename) from None
 
 
 def _convert(
@@ -190,3 +210,95 @@ def meta_location(meta: Any) -> tuple[int | None, int | None]:
     if meta is None or getattr(meta, "empty", True):
         return None, None
     return meta.line, meta.column
+
+
+_TOML_POS = re.compile(r"\(at line (\d+), column (\d+)\)")
+
+
+def parse_json(text: str, filename: str | None, error: type[SourceError], what: str) -> Any:
+    """The data of a JSON text; any failure raises ``error`` naming ``filename``.
+
+    Parameters
+    ----------
+    text : str
+    filename : str or None
+        Named in errors (``<string>`` when None).
+    error : type of SourceError
+        The error raised (e.g. :class:`~multiarm.errors.FormatError`).
+    what : str
+        What the file holds, for the messages (``"problem file"``).
+
+    Examples
+    --------
+    >>> from multiarm.errors import FormatError
+    >>> parse_json('{"a": [1, 2]}', "p.json", FormatError, "problem file")
+    {'a': [1, 2]}
+    >>> parse_json('{"a": [1, 2}', "p.json", FormatError, "problem file")
+    Traceback (most recent call last):
+    ...
+    multiarm.errors.FormatError: p.json:1:12: Expecting ',' delimiter
+    >>> parse_json("[" * 100_000, "p.json", FormatError, "problem file")
+    Traceback (most recent call last):
+    ...
+    multiarm.errors.FormatError: p.json: problem file is nested too deeply
+    """
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise error(exc.msg, filename=filename, line=exc.lineno, column=exc.colno) from None
+    except RecursionError:
+        raise error(f"{what} is nested too deeply", filename=filename) from None
+    except ValueError as exc:  # int(): more digits than sys.get_int_max_str_digits()
+        raise error(
+            f"{what} holds a number with too many digits ({exc})", filename=filename
+        ) from None
+
+
+def parse_toml(text: str, filename: str | None, error: type[SourceError], what: str) -> Any:
+    """The data of a TOML text; any failure raises ``error`` at ``file:line:col``.
+
+    Parameters
+    ----------
+    text : str
+    filename : str or None
+        Named in errors (``<string>`` when None).
+    error : type of SourceError
+        The error raised (e.g. :class:`~multiarm.errors.FormatError`).
+    what : str
+        What the file holds, for the messages (``"sweep file"``).
+
+    Examples
+    --------
+    >>> from multiarm.errors import FormatError
+    >>> parse_toml('name = "x"\\nzones = [', "c.toml", FormatError, "cell file")
+    Traceback (most recent call last):
+    ...
+    multiarm.errors.FormatError: c.toml:2:10: TOML syntax error: Invalid value at the end of the file
+    >>> parse_toml("n = " + "9" * 5000, "c.toml", FormatError, "cell file")
+    Traceback (most recent call last):
+    ...
+    multiarm.errors.FormatError: c.toml: cell file holds a number with too many digits ...
+    """
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        msg = str(exc)
+        m = _TOML_POS.search(msg)
+        line = int(m.group(1)) if m else None
+        col = int(m.group(2)) if m else None
+        if m is None and "end of document" in msg:
+            lines = text.split("\n")
+            line, col = len(lines), len(lines[-1]) + 1
+            msg = msg.replace("(at end of document)", "at the end of the file")
+        raise error(
+            f"TOML syntax error: {_TOML_POS.sub('', msg).strip()}",
+            filename=filename,
+            line=line,
+            column=col,
+        ) from None
+    except RecursionError:
+        raise error(f"{what} is nested too deeply", filename=filename) from None
+    except ValueError as exc:  # int(): more digits than sys.get_int_max_str_digits()
+        raise error(
+            f"{what} holds a number with too many digits ({exc})", filename=filename
+        ) from None

@@ -30,7 +30,7 @@ from typing import Any, Literal
 import numpy as np
 
 from multiarm.errors import FormatError, ValidationError
-from multiarm.text import read_source
+from multiarm.text import parse_json, read_source
 from scheduler.problem import BlockingOracle, Model, Problem, Window
 from scheduler.schedule import Schedule
 
@@ -124,13 +124,43 @@ def _setup(r: _Reader, value: Any) -> dict[str, Any]:
     if kind == "matrix":
         times = r.items(s.get("times"), "setup.times")
         for a, rows in enumerate(times):
+            width = None
             for i, row in enumerate(r.items(rows, f"setup.times[{a}]")):
-                for j, v in enumerate(r.items(row, f"setup.times[{a}][{i}]")):
+                items = r.items(row, f"setup.times[{a}][{i}]")
+                for j, v in enumerate(items):
                     r.number(v, f"setup.times[{a}][{i}][{j}]")
+                if width is not None and len(items) != width:
+                    raise r.fail(
+                        f"setup.times[{a}][{i}]",
+                        f"expected {width} values like the rows before, got {len(items)}",
+                    )
+                width = len(items)
+        shapes = {
+            (len(rows), len(rows[0]) if rows else 0) for rows in times if isinstance(rows, list)
+        }
+        if len(shapes) > 1:
+            raise r.fail("setup.times", "every arm's table must have the same shape")
     if kind == "travel":
         for key in ("start", "end", "home", "speed", "base"):
             if key not in s:
                 raise r.fail("setup", f"missing key {key!r}")
+        for key in ("start", "end", "home"):
+            for i, point in enumerate(r.items(s[key], f"setup.{key}")):
+                xyz = r.items(point, f"setup.{key}[{i}]")
+                if len(xyz) != 3:
+                    raise r.fail(f"setup.{key}[{i}]", f"expected [x, y, z], got {len(xyz)} values")
+                for j, v in enumerate(xyz):
+                    r.number(v, f"setup.{key}[{i}][{j}]")
+        for key in ("speed", "base"):
+            if isinstance(s[key], list):
+                for i, v in enumerate(s[key]):
+                    r.number(v, f"setup.{key}[{i}]")
+            else:
+                r.number(s[key], f"setup.{key}")
+        if "metric" in s and s["metric"] not in ("euclidean", "manhattan"):
+            raise r.fail(
+                "setup.metric", f"expected 'euclidean' or 'manhattan', got {_show(s['metric'])}"
+            )
     return dict(s)
 
 
@@ -178,17 +208,27 @@ def problem_from_dict(
             start_zones=r.names(at.get("start_zones", []), f"{w}.start_zones"),
         )
     tasks = r.items(top["tasks"], "tasks")
+    # names are resolved to ids here (the first of a duplicate name, as the
+    # model does), so that building stays linear in the number of tasks;
+    # unknown names go to the model as names, which refuses them by name
+    task_id: dict[str, int] = {}
+    arm_id: dict[str, int] = {}
+    for i, a in enumerate(top["arms"]):
+        arm_id.setdefault(a["name"], i)
     for i, t in enumerate(tasks):
         w = f"tasks[{i}]"
         tt = r.table(t, w, _TASK, {"name"})
+        name = r.name(tt["name"], f"{w}.name")
+        task_id.setdefault(name, i)
         m.add_task(
-            r.name(tt["name"], f"{w}.name"),
+            name,
             release=r.number(tt.get("release", 0.0), f"{w}.release"),
             group=r.integer(tt.get("group", -1), f"{w}.group"),
         )
     for i, tt in enumerate(tasks):
         w = f"tasks[{i}]"
-        m.add_predecessors(tt["name"], r.names(tt.get("predecessors", []), f"{w}.predecessors"))
+        preds = r.names(tt.get("predecessors", []), f"{w}.predecessors")
+        m.add_predecessors(i, [task_id.get(p, p) for p in preds])
         for j, md in enumerate(r.items(tt.get("modes", []), f"{w}.modes")):
             wm = f"{w}.modes[{j}]"
             mt = r.table(md, wm, _MODE, {"arm", "duration"})
@@ -207,9 +247,10 @@ def problem_from_dict(
                         kind,
                     )
                 )
+            arm = r.name(mt["arm"], f"{wm}.arm")
             m.add_mode(
-                tt["name"],
-                r.name(mt["arm"], f"{wm}.arm"),
+                i,
+                arm_id.get(arm, arm),
                 r.number(mt["duration"], f"{wm}.duration"),
                 windows=windows,
                 tools=r.names(mt.get("tools", []), f"{wm}.tools"),
@@ -369,12 +410,7 @@ def load_schedule(path: str | PathLike[str], problem: Problem) -> Schedule:
 def _read_json(path: str | PathLike[str], what: str) -> Any:
     name = fspath(path)
     text = read_source(path, FormatError, what)
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise FormatError(exc.msg, filename=name, line=exc.lineno, column=exc.colno) from None
-    except RecursionError:
-        raise FormatError(f"{what} file is nested too deeply", filename=name) from None
+    return parse_json(text, name, FormatError, f"{what} file")
 
 
 FileKind = Literal["problem", "schedule", "fjsp"]

@@ -41,7 +41,6 @@ import dataclasses
 import json
 import math
 import re
-import tomllib
 import types
 import typing
 from collections.abc import Mapping
@@ -51,6 +50,8 @@ from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin
 
 from multiarm.errors import FormatError, SourceError, ValidationError
+from multiarm.text import parse_json
+from multiarm.text import parse_toml as _parse_toml
 from tasklib.arrivals import ARRIVAL_MODELS, Feeder
 from tasklib.model import Part, PartGroup, Task, TaskSet
 from tasklib.pose import DOWN, Pose
@@ -454,25 +455,12 @@ def read_toml_source(path: str | PathLike[str], what: str) -> str:
 def parse_toml(text: str, filename: str) -> dict[str, Any]:
     """Parse TOML text; a syntax error is a :class:`FormatError` at ``file:line:col``.
 
-    Shared by every TOML file of the package (task sets, cells).
+    Shared by every TOML file of the package (task sets, cells); nesting too
+    deep and numbers with too many digits are errors naming the file too
+    (:func:`multiarm.text.parse_toml`).
     """
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        msg = str(exc)
-        m = _TOML_POS.search(msg)
-        line = int(m.group(1)) if m else None
-        col = int(m.group(2)) if m else None
-        if m is None and "end of document" in msg:
-            lines = text.split("\n")
-            line, col = len(lines), len(lines[-1]) + 1
-            msg = msg.replace("(at end of document)", "at the end of the file")
-        raise FormatError(
-            f"TOML syntax error: {_TOML_POS.sub('', msg).strip()}",
-            filename=filename,
-            line=line,
-            column=col,
-        ) from None
+    data: dict[str, Any] = _parse_toml(text, filename, FormatError, "TOML file")
+    return data
 
 
 def save_taskset(ts: TaskSet, path: str | PathLike[str]) -> Path:
@@ -507,10 +495,7 @@ def load_taskset(path: str | PathLike[str]) -> TaskSet:
     if kind == "toml":
         data: Any = parse_toml(text, name)
     else:
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise FormatError(exc.msg, filename=name, line=exc.lineno, column=exc.colno) from None
+        data = parse_json(text, name, FormatError, "task-set file")
     try:
         return taskset_from_dict(data, filename=name)
     except SourceError:

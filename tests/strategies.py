@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from hypothesis import strategies as st
 
@@ -457,3 +458,121 @@ def zone_problems(
                 tools=[f"k{k}" for k in held],
             )
     return m.build()
+
+
+# ------------------------------------------------- cell-file numeric fields
+
+EXTREME_NUMBERS: tuple[float | int, ...] = (
+    0,
+    0.0,
+    -0.0,
+    1e-300,
+    -1e-300,
+    5e-324,
+    1e300,
+    -1e300,
+    math.inf,
+    -math.inf,
+    math.nan,
+    1e-6,
+    1e6,
+    2**63,
+    -(2**63),
+    10**30,
+)
+"""Values a cell file may hold that physical arithmetic trips on."""
+
+extreme_numbers = (
+    st.sampled_from(EXTREME_NUMBERS)
+    | st.floats(width=64)
+    | st.integers(-(2**70), 2**70)
+    | st.floats(-1e-3, 1e-3)
+)
+
+
+def numeric_cell_data() -> dict[str, object]:
+    """A cell file's data with a gantry and a SCARA in which every optional
+    numeric field is present (so that each can be changed), built-in zones and
+    tasks of the supersigma cell."""
+    return {
+        "name": "numbers",
+        "zones": "builtin:supersigma",
+        "tasks": "builtin:supersigma",
+        "compile": {"padding": 0.005, "seed": 0},
+        "arms": {
+            "g": {
+                "type": "gantry",
+                "base": [0.0, 0.0, 0.0, 0.0],
+                "rails": {"x": [0.0, 1.85], "y": [0.0, 1.2], "z": [0.0, 0.6]},
+                "height": 0.8,
+                "hand": [0.06, 0.06, 0.1],
+                "capabilities": ["gripper", "force_sensor", "object_detector", "tool_changer"],
+                "tools": ["screwdriver"],
+                "payload": 2.0,
+                "start": [0.02, 0.6, 0.6, 0.0],
+                "stepper": {
+                    "steps_per_turn": 400,
+                    "step_length": 0.0000375,
+                    "max_rate": 15000.0,
+                    "low_rate": 1000.0,
+                    "stop_accel": 4.0,
+                },
+            },
+            "s": {
+                "type": "scara",
+                "base": [-0.5, -0.5, 0.0, 0.7853981633974483],
+                "link_lengths": [0.45, 0.4],
+                "z_range": [0.0, 0.35],
+                "arm_height": 0.47,
+                "max_velocity": [3.0, 4.0, 1.0, 6.0],
+                "max_acceleration": [10.0, 15.0, 5.0, 30.0],
+                "max_jerk": [100.0, 150.0, 50.0, 300.0],
+                "radius": 0.05,
+                "payload": 3.0,
+            },
+        },
+    }
+
+
+def _numeric_paths(node: object, path: tuple[str | int, ...]) -> list[tuple[str | int, ...]]:
+    if isinstance(node, bool):
+        return []
+    if isinstance(node, int | float):
+        return [path]
+    if isinstance(node, dict):
+        return [p for k, v in node.items() for p in _numeric_paths(v, (*path, k))]
+    if isinstance(node, list):
+        return [p for i, v in enumerate(node) for p in _numeric_paths(v, (*path, i))]
+    return []
+
+
+CELL_NUMERIC_FIELDS: tuple[tuple[str | int, ...], ...] = tuple(
+    _numeric_paths(numeric_cell_data(), ())
+)
+"""Every numeric field of :func:`numeric_cell_data`, as a key path."""
+
+
+@st.composite
+def cell_number_edits(
+    draw: st.DrawFn, max_edits: int = 3
+) -> list[tuple[tuple[str | int, ...], float | int]]:
+    """One to ``max_edits`` numeric fields of :func:`numeric_cell_data` with extreme values."""
+    fields = draw(
+        st.lists(st.sampled_from(CELL_NUMERIC_FIELDS), min_size=1, max_size=max_edits, unique=True)
+    )
+    return [(f, draw(extreme_numbers)) for f in fields]
+
+
+def with_edits(
+    data: dict[str, object], edits: list[tuple[tuple[str | int, ...], float | int]]
+) -> dict[str, object]:
+    """A deep copy of ``data`` with each ``(path, value)`` of ``edits`` set."""
+    import copy
+
+    out = copy.deepcopy(data)
+    for path, value in edits:
+        node: Any = out
+        for key in path[:-1]:
+            node = node[key]
+        node[path[-1]] = value
+    return out

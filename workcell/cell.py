@@ -196,9 +196,9 @@ class Cell:
                 f"not {g!r}"
             )
         object.__setattr__(self, "grid", float(g))
-        if not (math.isfinite(self.padding) and 0 < self.padding <= 0.1):
+        if not (math.isfinite(self.padding) and 1e-4 <= self.padding <= 0.1):
             raise ValidationError(
-                f"cell {self.name!r}: padding must be in (0, 0.1] metres, got {self.padding}"
+                f"cell {self.name!r}: padding must be in [0.0001, 0.1] metres, got {self.padding}"
             )
 
     def arm(self, name: str) -> DriveArm:

@@ -368,7 +368,7 @@ class HalfSpaces(_Polytope):
     def _vertices_faces(self) -> tuple[FloatArray, IntArray]:
         if "vf" not in self._cache:
             from scipy.optimize import linprog
-            from scipy.spatial import HalfspaceIntersection
+            from scipy.spatial import HalfspaceIntersection, QhullError
 
             a, b = self._halfspaces()
             norms = np.linalg.norm(a, axis=1)
@@ -382,7 +382,13 @@ class HalfSpaces(_Polytope):
             )
             if res.status != 0 or res.x[3] <= 1e-6:
                 raise ValueError("the walls leave no volume inside the cell")
-            hs = HalfspaceIntersection(np.c_[a, -b], res.x[:3])
+            try:
+                hs = HalfspaceIntersection(np.c_[a, -b], res.x[:3])
+            except QhullError as exc:  # numerically degenerate walls
+                why = str(exc).strip().splitlines()[0] if str(exc).strip() else "qhull failed"
+                raise ValueError(
+                    f"the walls leave no usable volume inside the cell ({why})"
+                ) from None
             _, _, v, f = _hull_of(hs.intersections)
             self._cache["vf"] = (v, f)
         result: tuple[FloatArray, IntArray] = self._cache["vf"]

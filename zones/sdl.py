@@ -26,6 +26,7 @@ True
 
 from __future__ import annotations
 
+import math
 import os
 from functools import cache
 from importlib import resources
@@ -92,6 +93,13 @@ class _Build(lark.Transformer[lark.Token, ZoneMap]):
     @lark.v_args(meta=True)
     def wall_plane(self, meta: Any, items: list[Any]) -> Wall:
         line, column = meta_location(meta)
+        normal = items[2]
+        if all(map(math.isfinite, normal)) and not math.isfinite(sum(c * c for c in normal)):
+            # its length overflows: the unit normal would come out as zero
+            raise self._err(
+                f"wall {str(items[0])!r}: the normal is too long to normalise (give a unit vector)",
+                meta,
+            )
         return Wall(str(items[0]), items[1], items[2], line=line, column=column)
 
     @lark.v_args(meta=True)

@@ -72,7 +72,6 @@ import glob
 import math
 import os
 import re
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import fields
 from fnmatch import fnmatchcase
@@ -81,7 +80,7 @@ from pathlib import Path
 from typing import Any
 
 from multiarm.errors import FormatError, MultiarmError, UsageError, ValidationError
-from multiarm.text import read_source
+from multiarm.text import parse_toml, read_source
 from scheduler import REGISTRY, SOLVERS
 from workcell.cell import EXAMPLES
 from workcell.experiments.grid import BENCHMARK, InstanceSpec, Run, SolverConfig, Sweep
@@ -100,7 +99,6 @@ __all__ = [
 ]
 
 
-_TOML_POS = re.compile(r"\(at line (\d+), column (\d+)\)")
 _SWEEP_KEYS = {"name", "description", "out", "repetitions", "workers"}
 _QUICK_KEYS = {"instances", "solvers", "time_limit", "params", "repetitions"}
 _INSTANCE_KEYS = {
@@ -185,19 +183,7 @@ def parse_sweep(text: str, filename: str | None = None, base_dir: Path | None = 
         A field is wrong (``file: field.path: message``).
     """
     fname = filename or "<string>"
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        msg = str(exc)
-        m = _TOML_POS.search(msg)
-        line = int(m.group(1)) if m else None
-        col = int(m.group(2)) if m else None
-        raise FormatError(
-            f"TOML syntax error: {_TOML_POS.sub('', msg).strip()}",
-            filename=fname,
-            line=line,
-            column=col,
-        ) from None
+    data = parse_toml(text, fname, FormatError, "sweep file")
     return sweep_from_dict(data, filename=fname, base_dir=base_dir)
 
 
@@ -387,7 +373,7 @@ def _best_known(w: _Where, item: Mapping[str, Any], where: str) -> dict[str, flo
 
 def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> list[InstanceSpec]:
     kind = item.get("kind")
-    if kind not in _INSTANCE_KEYS:
+    if not isinstance(kind, str) or kind not in _INSTANCE_KEYS:
         raise w.fail(
             f"{where}.kind", f"expected one of {', '.join(map(repr, _INSTANCE_KEYS))}, got {kind!r}"
         )
@@ -537,7 +523,7 @@ def _benchmarks(
 def _solvers(w: _Where, item: Mapping[str, Any], where: str) -> list[SolverConfig]:
     _unknown(w, item, _SOLVER_KEYS, where)
     solver = item.get("solver")
-    if solver not in REGISTRY:
+    if not isinstance(solver, str) or solver not in REGISTRY:
         raise w.fail(f"{where}.solver", f"expected one of {', '.join(SOLVERS)}, got {solver!r}")
     label = _str(w, item.get("label", solver), f"{where}.label")
     opts = dict(_table(w, item.get("options", {}), f"{where}.options"))

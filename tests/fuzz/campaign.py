@@ -1,0 +1,252 @@
+"""Fuzz campaigns: each target in its own process, one after the other.
+
+Usage::
+
+    python -m tests.fuzz.campaign [--runs N] [--max-time S] [--timeout S]
+                                  [--seed N] [--targets a,b,...] [--out PREFIX]
+
+Each target (:data:`tests.fuzz.targets.TARGETS`) runs under atheris with its
+seeds (the shipped examples and ``tests/fuzz/corpus/<target>/``) until it has
+executed ``--runs`` inputs or spent ``--max-time`` seconds. A finding (an
+exception outside our family, an error naming no place, a hang longer than
+``--timeout`` seconds, more than ``--rss-limit`` MB) stops that target; its
+input is written to ``--artifacts`` (``.fuzz/`` by default) and shown. With
+``--out PREFIX`` the figures go to ``PREFIX.json`` and ``PREFIX.md``.
+``make fuzz`` runs the long campaign; the test suite runs a short one
+(``tests/fuzz/test_fuzz.py``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from tests.fuzz.targets import ROOT, TARGETS, seed_files
+
+__all__ = ["FuzzRun", "fuzz_target", "main"]
+
+
+@dataclass(frozen=True, slots=True)
+class FuzzRun:
+    """The figures of one target's run.
+
+    Attributes
+    ----------
+    target : str
+    status : str
+        ``"ok"`` (no finding), ``"crash"`` (an exception escaped the target),
+        ``"timeout"`` (a hang), ``"oom"`` or ``"error"`` (the run itself
+        failed; see ``log``).
+    inputs : int
+        Inputs executed (libFuzzer's ``number_of_executed_units``).
+    seconds : float
+        Wall time of the process, start-up included.
+    exec_per_s : float
+        libFuzzer's average executions per second.
+    coverage : int or None
+        Coverage counters reached (libFuzzer's ``cov``: Python branches of our
+        packages and lark).
+    features : int or None
+        libFuzzer's ``ft`` (coverage features).
+    corpus : int or None
+        Inputs kept in the corpus at the end.
+    seeds : int
+        Seed files given.
+    artifact : str or None
+        The input of the finding.
+    log : str
+        The last lines of the fuzzer's output.
+    """
+
+    target: str
+    status: str
+    inputs: int
+    seconds: float
+    exec_per_s: float
+    coverage: int | None
+    features: int | None
+    corpus: int | None
+    seeds: int
+    artifact: str | None
+    log: str
+
+
+def _last_int(pattern: str, text: str) -> int | None:
+    found = re.findall(pattern, text)
+    return int(found[-1]) if found else None
+
+
+def fuzz_target(
+    name: str,
+    *,
+    runs: int,
+    max_time: int,
+    timeout: int = 10,
+    seed: int = 1,
+    rss_limit_mb: int = 2048,
+    artifacts: Path | None = None,
+) -> FuzzRun:
+    """Run target ``name`` in a subprocess and return its figures.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`~tests.fuzz.targets.TARGETS`.
+    runs : int
+        Inputs to execute (libFuzzer ``-runs``).
+    max_time : int
+        Seconds at most (libFuzzer ``-max_total_time``).
+    timeout : int
+        Seconds one input may take before it counts as a hang.
+    seed : int
+        libFuzzer's random seed (> 0; the same seed mutates the same way).
+    rss_limit_mb : int
+        Memory limit of the process.
+    artifacts : Path, optional
+        Folder the input of a finding is written to (a temporary one, deleted
+        with the rest, when not given).
+    """
+    with tempfile.TemporaryDirectory(prefix=f"multiarm-fuzz-{name}-") as tmp:
+        work, seeds, corpus = Path(tmp, "work"), Path(tmp, "seeds"), Path(tmp, "corpus")
+        for d in (work, seeds, corpus):
+            d.mkdir()
+        files = seed_files(name)
+        for i, f in enumerate(files):
+            shutil.copyfile(f, seeds / f"{i:03d}_{f.name}")
+        out = Path(artifacts) if artifacts is not None else Path(tmp, "artifacts")
+        out.mkdir(parents=True, exist_ok=True)
+        cmd = [
+            sys.executable,
+            "-m",
+            "tests.fuzz.run",
+            name,
+            str(work),
+            f"-runs={runs}",
+            f"-max_total_time={max_time}",
+            f"-timeout={timeout}",
+            f"-rss_limit_mb={rss_limit_mb}",
+            f"-seed={seed}",
+            f"-artifact_prefix={out}/{name}-",
+            "-print_final_stats=1",
+            str(corpus),
+            str(seeds),
+        ]
+        t0 = time.perf_counter()
+        proc = subprocess.run(
+            cmd,
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            errors="replace",
+            timeout=max_time + 10 * timeout + 300,
+            check=False,
+        )
+        seconds = time.perf_counter() - t0
+    log = proc.stdout + proc.stderr
+    written = re.findall(r"Test unit written to (\S+)", log)
+    if "Uncaught Python exception" in log or "fuzz target exited" in log:
+        status = "crash"
+    elif "ALARM: working on the last Unit" in log or "libFuzzer: timeout" in log:
+        status = "timeout"
+    elif "out-of-memory" in log:
+        status = "oom"
+    elif proc.returncode != 0:
+        status = "error"
+    else:
+        status = "ok"
+    if artifacts is None:
+        written = []
+    return FuzzRun(
+        target=name,
+        status=status,
+        inputs=_last_int(r"stat::number_of_executed_units:\s*(\d+)", log) or 0,
+        seconds=round(seconds, 1),
+        exec_per_s=float(_last_int(r"stat::average_exec_per_sec:\s*(\d+)", log) or 0),
+        coverage=_last_int(r"\bcov: (\d+)", log),
+        features=_last_int(r"\bft: (\d+)", log),
+        corpus=_last_int(r"\bcorp: (\d+)", log),
+        seeds=len(files),
+        artifact=written[-1] if written else None,
+        log="\n".join(log.splitlines()[-60:]),
+    )
+
+
+def _markdown(results: list[FuzzRun], args: argparse.Namespace) -> str:
+    lines = [
+        "# Fuzzing the parsers",
+        "",
+        "Coverage-guided fuzzing with atheris (libFuzzer), one target per input format "
+        "(tests/fuzz/targets.py). The contract: every input loads, or raises an error of "
+        "ours naming the file, line and column or the field; any other exception, "
+        f"or an input taking more than {args.timeout} s, is a finding.",
+        "",
+        f"Command: `python -m tests.fuzz.campaign --runs {args.runs} --max-time {args.max_time} "
+        f"--timeout {args.timeout} --seed {args.seed}`"
+        + (f" `--targets {args.targets}`" if args.targets else "")
+        + ". Machine: 2 cores shared with other work; exec/s are noisy.",
+        "",
+        "| target | status | inputs | exec/s | coverage (cov) | features (ft) | corpus | seeds | wall (s) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in results:
+        lines.append(
+            f"| {r.target} | {r.status} | {r.inputs} | {r.exec_per_s:.0f} | {r.coverage} "
+            f"| {r.features} | {r.corpus} | {r.seeds} | {r.seconds} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The command line (module docstring); exit status 1 when any target found something."""
+    ap = argparse.ArgumentParser(prog="python -m tests.fuzz.campaign", description=__doc__)
+    ap.add_argument("--runs", type=int, default=100_000, help="inputs per target (default 1e5)")
+    ap.add_argument("--max-time", type=int, default=3600, help="seconds per target at most")
+    ap.add_argument("--timeout", type=int, default=10, help="seconds per input (a hang)")
+    ap.add_argument("--seed", type=int, default=1, help="libFuzzer seed (> 0)")
+    ap.add_argument("--rss-limit", type=int, default=2048, help="MB per process")
+    ap.add_argument("--targets", default="", help="comma-separated (default: all)")
+    ap.add_argument("--artifacts", type=Path, default=ROOT / ".fuzz", help="findings go here")
+    ap.add_argument("--out", type=Path, default=None, help="write PREFIX.json and PREFIX.md")
+    args = ap.parse_args(argv)
+    names = [n for n in args.targets.split(",") if n] or list(TARGETS)
+    unknown = [n for n in names if n not in TARGETS]
+    if unknown:
+        ap.error(f"unknown target {unknown[0]!r} (known: {', '.join(TARGETS)})")
+    results = []
+    for name in names:
+        r = fuzz_target(
+            name,
+            runs=args.runs,
+            max_time=args.max_time,
+            timeout=args.timeout,
+            seed=args.seed,
+            rss_limit_mb=args.rss_limit,
+            artifacts=args.artifacts,
+        )
+        results.append(r)
+        print(
+            f"{name}: {r.status}, {r.inputs} inputs, {r.exec_per_s:.0f} exec/s, "
+            f"cov {r.coverage}, {r.seconds} s" + (f", finding: {r.artifact}" if r.artifact else ""),
+            flush=True,
+        )
+        if r.status != "ok":
+            print(r.log, flush=True)
+        if args.out is not None:
+            args.out.with_suffix(".json").write_text(
+                json.dumps([asdict(x) | {"log": None} for x in results], indent=1) + "\n",
+                encoding="utf-8",
+            )
+            args.out.with_suffix(".md").write_text(_markdown(results, args), encoding="utf-8")
+    return 0 if all(r.status == "ok" for r in results) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
