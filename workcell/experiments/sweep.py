@@ -54,6 +54,13 @@ a list of tables: one instance each, named by their ``name``) and
 row (a dict) or rows (a list of dicts) it returns. A speed comparison is
 one such run, measuring every side of it in one process.
 
+An instance of kind ``campaign`` is a fault campaign
+(:mod:`workcell.campaign`): ``cells``, ``episodes`` per cell and seed,
+``batch`` episodes per run (default 25) and campaign ``seeds`` (default
+``[0]``); each batch is one ``benchmark`` run of
+``workcell.campaign:campaign_batch``, whose rows (one per episode) land in
+the ``metrics`` column.
+
 A run without a wall-clock limit needs a work limit, so that it cannot hang
 and its result depends on the seed only: ``options.max_evaluations`` for
 ``tree``, ``options.max_deterministic_time`` (CP-SAT's deterministic time,
@@ -143,6 +150,7 @@ _INSTANCE_KEYS = {
     "generated": {"kind", "family", "sizes", "seeds", "best_known"},
     "cell": {"kind", "family", "cells", "best_known"},
     "benchmark": {"kind", "family", "function", "path", "params", "seeds"},
+    "campaign": {"kind", "family", "cells", "episodes", "batch", "seeds"},
 }
 _GENERATOR_KEYS = {
     "precedence": float,
@@ -846,6 +854,8 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
                 )
     elif kind == "benchmark":
         out += _benchmarks(w, item, where, base, family)
+    elif kind == "campaign":
+        out += _campaign(w, item, where, base, family)
     else:
         from workcell.cell import EXAMPLES
 
@@ -872,6 +882,33 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
                     base_dir=fspath(base),
                 )
             )
+    return out
+
+
+def _campaign(
+    w: _Where, item: Mapping[str, Any], where: str, base: Path, family: str
+) -> list[InstanceSpec]:
+    """A fault campaign (:mod:`workcell.campaign`): one ``benchmark`` run per batch."""
+    from workcell.campaign import campaign_instances
+    from workcell.cell import EXAMPLES
+
+    cells = []
+    for j, c in enumerate(_list(w, item.get("cells"), f"{where}.cells")):
+        c = _str(w, c, f"{where}.cells[{j}]")
+        p = Path(c) if Path(c).is_absolute() else base / c
+        if c not in EXAMPLES and not p.is_file():
+            raise w.fail(
+                f"{where}.cells[{j}]",
+                f"{c!r} is neither a built-in cell ({', '.join(EXAMPLES)}) nor a file",
+            )
+        cells.append(c if c in EXAMPLES else fspath(p.resolve()))
+    episodes = _int(w, item.get("episodes"), f"{where}.episodes", least=1)
+    batch = _int(w, item.get("batch", 25), f"{where}.batch", least=1)
+    seeds = [
+        _int(w, s, f"{where}.seeds[{j}]")
+        for j, s in enumerate(_list(w, item.get("seeds", [0]), f"{where}.seeds"))
+    ]
+    out: list[InstanceSpec] = campaign_instances(cells, episodes, seeds, batch, family)
     return out
 
 
