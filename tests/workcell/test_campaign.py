@@ -285,10 +285,7 @@ def test_cli_campaign_writes_the_table(tmp_path: Path, capsys: pytest.CaptureFix
     assert "campaign: 4/4 episodes" in captured.err  # one line per batch when piped
     assert pd.read_csv(tmp_path / "episodes.csv")["episode"].tolist() == list(range(4))
     # the same command again resumes: nothing to run, the same table
-    assert (
-        main(["campaign", "scara4", "--episodes", "6", "--seed", "2", "--out", str(tmp_path)])
-        == code
-    )
+    assert main(args) == code
     again = pd.read_parquet(tmp_path / "episodes.parquet")
     pd.testing.assert_frame_equal(again.drop(columns="wall_time"), table.drop(columns="wall_time"))
 
@@ -341,3 +338,19 @@ def test_a_slice_of_300_episodes_on_the_small_cells_finds_nothing() -> None:
     assert len(outcome.table) == 300
     assert outcome.errors == ()
     assert outcome.findings == 0, outcome.report(limit=20)
+
+
+def test_a_campaign_on_dask_gives_the_local_episodes(tmp_path: Path) -> None:
+    distributed = pytest.importorskip("distributed")
+    local = run_campaign(["scara4"], 2, seed=4, workers=1, batch=1)
+    # in-process workers (threads) share this process's compiled cell
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        remote = run_campaign(["scara4"], 2, seed=4, scheduler=client, batch=1, out=tmp_path)
+    same = [c for c in COLUMNS if c != "wall_time"]
+    pd.testing.assert_frame_equal(remote.table[same], local.table[same])
+    assert (tmp_path / "episodes.parquet").is_file()
