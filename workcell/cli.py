@@ -737,6 +737,29 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return 1 if outcome.failed else 0
 
 
+def cmd_campaign(args: argparse.Namespace) -> int:
+    """Run a seeded fault campaign (or replay one episode); print the findings."""
+    from workcell import campaign
+
+    if args.replay is not None:
+        seed, index = campaign.parse_replay(args.replay)
+        print(campaign.describe(campaign.replay(args.cells[0], seed, index)))
+        return 0
+    outcome = campaign.run_campaign(
+        args.cells,
+        args.episodes,
+        args.seed,
+        workers=args.workers,
+        dask_address=args.dask_address,
+        out=args.out,
+        progress=not args.no_progress,
+    )
+    print(outcome.report())
+    if outcome.out is not None:
+        print(f"episodes: {outcome.out / 'episodes.parquet'} (and .csv)")
+    return 1 if outcome.findings or outcome.errors else 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
     parser = argparse.ArgumentParser(
@@ -844,6 +867,26 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="run the benchmarks (writes benchmarks/results/)")
     p.add_argument("--quick", action="store_true", help="tiny sizes, a smoke run")
     p.set_defaults(func=cmd_bench)
+    p = sub.add_parser(
+        "campaign",
+        help="a seeded fault campaign: random fault plans simulated and checked, findings replayable",
+    )
+    p.add_argument("cells", nargs="+", metavar="CELL", help="built-in cells' names or cell files")
+    p.add_argument("--episodes", type=int, default=100, metavar="N", help="episodes per cell")
+    p.add_argument("--seed", type=int, default=0, help="the campaign's seed")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N", help="local processes (default: CPUs)")
+    where.add_argument(
+        "--dask-address",
+        "--scheduler",
+        dest="dask_address",
+        metavar="ADDRESS",
+        help="run on the Dask cluster whose scheduler is at ADDRESS, e.g. tcp://host:8786",
+    )
+    p.add_argument("--out", metavar="DIR", help="write the episodes table (Parquet and CSV) here")
+    p.add_argument("--replay", metavar="SEED:EPISODE", help="run one episode again and print it")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar or lines")
+    p.set_defaults(func=cmd_campaign)
     p = sub.add_parser(
         "sweep", help="run a sweep file (TOML) locally or on a Dask cluster; results as Parquet"
     )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import importlib
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -19,7 +19,19 @@ from workcell.experiments.grid import InstanceSpec
 if TYPE_CHECKING:
     from scheduler import Problem
 
-__all__ = ["benchmark_function", "build_problem"]
+__all__ = [
+    "CAMPAIGN_BATCH",
+    "CAMPAIGN_FUNCTION",
+    "benchmark_function",
+    "build_problem",
+    "campaign_instances",
+]
+
+CAMPAIGN_FUNCTION = "workcell.campaign:campaign_batch"
+"""The measurement function of a fault campaign's sweep runs (:mod:`workcell.campaign`)."""
+
+CAMPAIGN_BATCH = 25
+"""Episodes per sweep run of a campaign by default."""
 
 
 @lru_cache(maxsize=32)
@@ -90,3 +102,60 @@ def benchmark_function(instance: InstanceSpec) -> Callable[..., Any]:
     if not callable(fn):
         raise UsageError(f"benchmark {instance.source!r}: {module!r} has no function {attr!r}")
     return fn  # type: ignore[no-any-return]
+
+
+def campaign_instances(
+    cells: Sequence[str],
+    episodes: int,
+    seeds: Sequence[int] = (0,),
+    batch: int = CAMPAIGN_BATCH,
+    family: str = "campaign",
+) -> list[Any]:
+    """The sweep instances (kind ``benchmark``) of a campaign: one per batch.
+
+    Parameters
+    ----------
+    cells : sequence of str
+    episodes : int
+        Per cell and seed.
+    seeds : sequence of int
+        Campaign seeds.
+    batch : int
+        Episodes per run.
+    family : str
+        The instances' family label.
+
+    Returns
+    -------
+    list of InstanceSpec
+
+    Raises
+    ------
+    UsageError
+        No cell, or a count out of range.
+    """
+    if not cells:
+        raise UsageError("campaign: needs at least one cell")
+    for name, v, least in (("episodes", episodes, 1), ("batch", batch, 1)):
+        if isinstance(v, bool) or not isinstance(v, int) or v < least:
+            raise UsageError(f"campaign: {name} must be an integer >= {least}, got {v!r}")
+    for s in seeds:
+        if isinstance(s, bool) or not isinstance(s, int) or s < 0:
+            raise UsageError(f"campaign: seeds must be integers >= 0, got {s!r}")
+    out = []
+    for cell in cells:
+        for s in seeds:
+            for first in range(0, episodes, batch):
+                n = min(batch, episodes - first)
+                out.append(
+                    InstanceSpec(
+                        "benchmark",
+                        family,
+                        f"{Path(cell).stem}-s{s}-e{first}",
+                        source=CAMPAIGN_FUNCTION,
+                        params=(("cell", cell), ("count", n), ("first", first)),
+                        seed=int(s),
+                        base_dir="",
+                    )
+                )
+    return out

@@ -56,6 +56,13 @@ a list of tables: one instance each, named by their ``name``) and
 row (a dict) or rows (a list of dicts) it returns. A speed comparison is
 one such run, measuring every side of it in one process.
 
+An instance of kind ``campaign`` is a fault campaign
+(:mod:`workcell.campaign`): ``cells``, ``episodes`` per cell and seed,
+``batch`` episodes per run (default 25) and campaign ``seeds`` (default
+``[0]``); each batch is one ``benchmark`` run of
+``workcell.campaign:campaign_batch``, whose rows (one per episode) land in
+the ``metrics`` column.
+
 A run without a wall-clock limit needs a work limit, so that it cannot hang
 and its result depends on the seed only: ``options.max_evaluations`` for
 ``tree``, ``options.max_deterministic_time`` (CP-SAT's deterministic time,
@@ -79,12 +86,26 @@ from os import PathLike, fspath
 from pathlib import Path
 from typing import Any
 
-from multiarm.errors import FormatError, MultiarmError, UsageError, ValidationError
+from multiarm.errors import FormatError, MultiarmError, UsageError
 from multiarm.text import parse_toml, read_source
 from scheduler import REGISTRY, SOLVERS
 from workcell.cell import EXAMPLES
+from workcell.experiments._fields import (
+    _int,
+    _list,
+    _number,
+    _param,
+    _str,
+    _table,
+    _unknown,
+    _Where,
+)
 from workcell.experiments.grid import BENCHMARK, InstanceSpec, Run, SolverConfig, Sweep
-from workcell.experiments.instances import benchmark_function
+from workcell.experiments.instances import (
+    CAMPAIGN_BATCH,
+    benchmark_function,
+    campaign_instances,
+)
 
 __all__ = [
     "BENCHMARK",
@@ -106,6 +127,7 @@ _INSTANCE_KEYS = {
     "generated": {"kind", "family", "sizes", "seeds", "best_known"},
     "cell": {"kind", "family", "cells", "best_known"},
     "benchmark": {"kind", "family", "function", "path", "params", "seeds"},
+    "campaign": {"kind", "family", "cells", "episodes", "batch", "seeds"},
 }
 _GENERATOR_KEYS = {
     "precedence": float,
@@ -124,16 +146,6 @@ _FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
 
 
 # ------------------------------------------------------------------ parsing
-
-
-class _Where:
-    """Builds ``file: field.path: message`` errors."""
-
-    def __init__(self, filename: str) -> None:
-        self.filename = filename
-
-    def fail(self, path: str, message: str) -> ValidationError:
-        return ValidationError(f"{self.filename}: {path}: {message}" if path else message)
 
 
 def load_sweep(path: str | PathLike[str]) -> Sweep:
@@ -185,49 +197,6 @@ def parse_sweep(text: str, filename: str | None = None, base_dir: Path | None = 
     fname = filename or "<string>"
     data = parse_toml(text, fname, FormatError, "sweep file")
     return sweep_from_dict(data, filename=fname, base_dir=base_dir)
-
-
-def _unknown(w: _Where, data: Mapping[str, Any], known: set[str], where: str) -> None:
-    bad = sorted(set(data) - known)
-    if bad:
-        raise w.fail(
-            f"{where}.{bad[0]}" if where else bad[0],
-            f"unknown field (known: {', '.join(sorted(known))})",
-        )
-
-
-def _table(w: _Where, value: Any, where: str) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise w.fail(where, f"expected a table, got {type(value).__name__}")
-    return value
-
-
-def _list(w: _Where, value: Any, where: str) -> list[Any]:
-    if not isinstance(value, list):
-        raise w.fail(where, f"expected a list, got {value!r}")
-    if not value:
-        raise w.fail(where, "expected a non-empty list")
-    return value
-
-
-def _int(w: _Where, value: Any, where: str, least: int = 0) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < least:
-        raise w.fail(where, f"expected an integer >= {least}, got {value!r}")
-    return value
-
-
-def _str(w: _Where, value: Any, where: str) -> str:
-    if not isinstance(value, str) or not value:
-        raise w.fail(where, f"expected a non-empty string, got {value!r}")
-    return value
-
-
-def _number(w: _Where, value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise w.fail(where, f"expected a number, got {value!r}")
-    if not (math.isfinite(value) and value > 0):
-        raise w.fail(where, f"expected a finite number > 0, got {value!r}")
-    return float(value)
 
 
 def sweep_from_dict(
@@ -352,15 +321,6 @@ def _quick(
     return tuple(sorted(out.items()))
 
 
-def _param(w: _Where, value: Any, where: str) -> Any:
-    """A benchmark parameter: a number, string or boolean, or a list of them (as a tuple)."""
-    if isinstance(value, list):
-        return tuple(_param(w, v, f"{where}[{j}]") for j, v in enumerate(value))
-    if isinstance(value, bool | int | str) or (isinstance(value, float) and math.isfinite(value)):
-        return value
-    raise w.fail(where, f"expected a number, string, boolean or list of them, got {value!r}")
-
-
 def _best_known(w: _Where, item: Mapping[str, Any], where: str) -> dict[str, float]:
     bk = _table(w, item.get("best_known", {}), f"{where}.best_known")
     out = {}
@@ -446,6 +406,8 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
                 )
     elif kind == "benchmark":
         out += _benchmarks(w, item, where, base, family)
+    elif kind == "campaign":
+        out += _campaign(w, item, where, base, family)
     else:
         if "cells" not in item:
             raise w.fail(f"{where}.cells", "missing: built-in cell names or cell files")
@@ -471,6 +433,29 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
                 )
             )
     return out
+
+
+def _campaign(
+    w: _Where, item: Mapping[str, Any], where: str, base: Path, family: str
+) -> list[InstanceSpec]:
+    """A fault campaign (:mod:`workcell.campaign`): one ``benchmark`` run per batch."""
+    cells = []
+    for j, c in enumerate(_list(w, item.get("cells"), f"{where}.cells")):
+        c = _str(w, c, f"{where}.cells[{j}]")
+        p = Path(c) if Path(c).is_absolute() else base / c
+        if c not in EXAMPLES and not p.is_file():
+            raise w.fail(
+                f"{where}.cells[{j}]",
+                f"{c!r} is neither a built-in cell ({', '.join(EXAMPLES)}) nor a file",
+            )
+        cells.append(c if c in EXAMPLES else fspath(p.resolve()))
+    episodes = _int(w, item.get("episodes"), f"{where}.episodes", least=1)
+    batch = _int(w, item.get("batch", CAMPAIGN_BATCH), f"{where}.batch", least=1)
+    seeds = [
+        _int(w, s, f"{where}.seeds[{j}]")
+        for j, s in enumerate(_list(w, item.get("seeds", [0]), f"{where}.seeds"))
+    ]
+    return campaign_instances(cells, episodes, seeds, batch, family)
 
 
 def _benchmarks(

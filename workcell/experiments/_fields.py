@@ -1,0 +1,71 @@
+"""Field readers of the sweep file: each error names the file and the field path."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from multiarm.errors import ValidationError
+
+
+class _Where:
+    """Builds ``file: field.path: message`` errors."""
+
+    def __init__(self, filename: str) -> None:
+        self.filename = filename
+
+    def fail(self, path: str, message: str) -> ValidationError:
+        return ValidationError(f"{self.filename}: {path}: {message}" if path else message)
+
+
+def _unknown(w: _Where, data: Mapping[str, Any], known: set[str], where: str) -> None:
+    bad = sorted(set(data) - known)
+    if bad:
+        raise w.fail(
+            f"{where}.{bad[0]}" if where else bad[0],
+            f"unknown field (known: {', '.join(sorted(known))})",
+        )
+
+
+def _table(w: _Where, value: Any, where: str) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise w.fail(where, f"expected a table, got {type(value).__name__}")
+    return value
+
+
+def _list(w: _Where, value: Any, where: str) -> list[Any]:
+    if not isinstance(value, list):
+        raise w.fail(where, f"expected a list, got {value!r}")
+    if not value:
+        raise w.fail(where, "expected a non-empty list")
+    return value
+
+
+def _int(w: _Where, value: Any, where: str, least: int = 0) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < least:
+        raise w.fail(where, f"expected an integer >= {least}, got {value!r}")
+    return value
+
+
+def _str(w: _Where, value: Any, where: str) -> str:
+    if not isinstance(value, str) or not value:
+        raise w.fail(where, f"expected a non-empty string, got {value!r}")
+    return value
+
+
+def _number(w: _Where, value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise w.fail(where, f"expected a number, got {value!r}")
+    if not (math.isfinite(value) and value > 0):
+        raise w.fail(where, f"expected a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def _param(w: _Where, value: Any, where: str) -> Any:
+    """A benchmark parameter: a number, string or boolean, or a list of them (as a tuple)."""
+    if isinstance(value, list):
+        return tuple(_param(w, v, f"{where}[{j}]") for j, v in enumerate(value))
+    if isinstance(value, bool | int | str) or (isinstance(value, float) and math.isfinite(value)):
+        return value
+    raise w.fail(where, f"expected a number, string, boolean or list of them, got {value!r}")
