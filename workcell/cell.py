@@ -73,7 +73,7 @@ PlanWith = Literal["nominal", "worst"]
 Park = Literal["home", "last"]
 Releases = Literal["expected", "sample", "none"]
 
-EXAMPLES: tuple[str, ...] = ("supersigma", "scara4", "cell8")
+EXAMPLES: tuple[str, ...] = ("supersigma", "scara4", "cell8", "urdf_cell")
 """Names of the built-in cells (:func:`load_example`)."""
 
 URDF_EXAMPLES: tuple[str, ...] = ("urdf_cell",)
@@ -468,7 +468,7 @@ def load_example(name: str) -> Cell:
     >>> load_example("scara4").summary()["arms"]
     4
     """
-    known = EXAMPLES + URDF_EXAMPLES
+    known = EXAMPLES
     if name not in known:
         raise ValidationError(f"unknown example cell {name!r} (known: {', '.join(known)})")
     data = tomllib.loads(_example_text(name))
