@@ -189,7 +189,9 @@ class SimResult:
 
     def tasks_frame(self) -> Any:
         """One row per task: task, arm, mode, planned_start, planned_end,
-        start, end, status ("done" | "failed"), cause."""
+        start, end, status ("done" | "failed"), cause (text) and cause_kind
+        (its category, one of :data:`~workcell.sim.coordinator.CAUSE_KINDS`;
+        "" for a task done)."""
         import pandas as pd
 
         cols = [
@@ -202,6 +204,7 @@ class SimResult:
             "end",
             "status",
             "cause",
+            "cause_kind",
         ]
         return pd.DataFrame(self._tasks, columns=cols)
 
@@ -296,6 +299,7 @@ def simulate(
     force_threshold: float | Mapping[str, float] = FREE_THRESHOLD,
     _zone_checks: bool = True,
     _geometry: bool = True,
+    strict: bool = False,
 ) -> SimResult:
     """Execute ``schedule`` in the simulated cell (S2.3-S2.7, S2.12).
 
@@ -359,6 +363,10 @@ def simulate(
         The wrist force sensors' free-motion threshold, newtons (one value,
         or per arm name); a crash above the threshold in force stops the
         arm (reflex arc, S1.2).
+    strict : bool
+        Raise :class:`~multiarm.errors.InternalError` on a stall (an arm with
+        work, no stop in force and no event pending: a bug of the simulator)
+        instead of failing its task with a ``"stall"`` cause (for tests).
 
     Returns
     -------
@@ -499,9 +507,12 @@ def simulate(
                 for t, task in enumerate(cc.cell.taskset.tasks)
                 if f.part in cc.cell.taskset.gating_parts(task.id)
             ]
-            kernel.schedule(
-                expected, coord.part_late, tasks, expected + f.delay, f.part, absolute=True
-            )
+            if expected <= kernel.now:  # known before the first trajectories go out
+                coord.part_late(tasks, expected + f.delay, f.part)
+            else:
+                kernel.schedule(
+                    expected, coord.part_late, tasks, expected + f.delay, f.part, absolute=True
+                )
     live: LiveMonitor | None = None
     if monitor is True or monitor == "live":
         live = LiveMonitor(cc, kernel, arms, trace, monitor_period)
@@ -533,6 +544,7 @@ def simulate(
         monitor_period,
         wall0,
         t_end,
+        strict,
     )
     result.monitor = live
     return result
@@ -584,6 +596,7 @@ def _result(
     monitor_period: float,
     wall0: float,
     t_end: float,
+    strict: bool = False,
 ) -> SimResult:
     p = cc.problem
     T = p.n_tasks
@@ -611,12 +624,13 @@ def _result(
                 end=float(log[1]),
                 status="done",
                 cause="",
+                cause_kind="",
             )
         else:
             m = int(plan.mode[t])
             a = int(p.mode_arm[m])
             row.update(arm=p.arm_names[a], mode=m, start=math.nan, end=math.nan, status="failed")
-            row["cause"] = _cause(coord, t)
+            row["cause_kind"], row["cause"] = _cause(coord, t, strict)
             trace.add(
                 kernel.now,
                 "task_failed",
@@ -687,6 +701,7 @@ def _result(
         message_delay=np.array(net.delays, dtype=float),
         messages=net.sent,
         retransmissions=net.retransmissions,
+        stale_frames=net.stale,
         failed_tasks=sum(1 for r in tasks if r["status"] == "failed"),
         done_tasks=sum(1 for r in tasks if r["status"] == "done"),
         ticks=ticker.ticks if ticker is not None else 0,
@@ -708,10 +723,28 @@ def _merge(dicts: list[dict[str, float]]) -> dict[str, float]:
     return dict(sorted(out.items()))
 
 
-def _cause(coord: Coordinator, t: int) -> str:
+def _cycle(graph: dict[int, list[int]]) -> list[int]:
+    """A cycle of the wait-for ``graph`` (arm -> arms it waits for), [] if none."""
+    for root in sorted(graph):
+        path: list[int] = []
+        on: dict[int, int] = {}
+        x: int | None = root
+        while x is not None and x not in on:
+            on[x] = len(path)
+            path.append(x)
+            nxt = graph.get(x, [])
+            x = min(nxt) if nxt else None
+        if x is not None:
+            return [*path[on[x] :], x]
+    return []
+
+
+def _cause(coord: Coordinator, t: int, strict: bool = False) -> tuple[str, str]:
+    """(category, text) of the failed task ``t`` (categories:
+    :data:`~workcell.sim.coordinator.CAUSE_KINDS`)."""
     p = coord.p
     if coord.cause[t]:
-        return coord.cause[t]
+        return coord.cause_kind[t] or "predecessor", coord.cause[t]
     # the predecessors not done (a done task's predecessors are all done)
     seen: set[int] = set()
     stack = [t]
@@ -722,37 +755,60 @@ def _cause(coord: Coordinator, t: int) -> str:
                 continue
             seen.add(q)
             if coord.cause[q]:
-                return f"predecessor {p.task_names[q]!r} failed: {coord.cause[q]}"
+                return "predecessor", f"predecessor {p.task_names[q]!r} failed: {coord.cause[q]}"
             stack.append(q)
 
     def no_arm(x: int) -> bool:
         return all(int(p.mode_arm[m]) in coord.failed_arms for m in p.task_modes[x])
 
     if no_arm(t):
-        return "no working arm can do it (every capable arm failed)"
+        return "arm_failed", "no working arm can do it (every capable arm failed)"
     for q in sorted(seen):
         if no_arm(q):
-            return f"predecessor {p.task_names[q]!r} cannot run: every arm able to do it failed"
+            return (
+                "predecessor",
+                f"predecessor {p.task_names[q]!r} cannot run: every arm able to do it failed",
+            )
     for q in sorted(seen):
         b = int(p.mode_arm[int(coord.plan.mode[q])])
         if b in coord.failed_arms:
             return (
+                "predecessor",
                 f"predecessor {p.task_names[q]!r} cannot run: its arm {p.arm_names[b]!r} failed"
-                + ("" if coord.resolving else " (re-solving off)")
+                + ("" if coord.resolving else " (re-solving off)"),
             )
     a = int(p.mode_arm[int(coord.plan.mode[t])])
     if a in coord.failed_arms:
         if not coord.resolving:
-            return f"arm {p.arm_names[a]!r} failed (re-solving off: its tasks are not reassigned)"
-        return f"arm {p.arm_names[a]!r} failed and no working arm could take the task"
+            return (
+                "arm_out",
+                f"arm {p.arm_names[a]!r} failed (re-solving off: its tasks are not reassigned)",
+            )
+        return "arm_failed", f"arm {p.arm_names[a]!r} failed and no working arm could take the task"
     if float(coord.plan.start[t]) >= FAR:
-        return "planned after a task that cannot run"
+        return "predecessor", "planned after a task that cannot run"
     held = {
-        c.name: [p.arm_names[b] for b in coord.geo_held.get(c.index, [])]
-        for c in coord.arms
-        if "geometry" in c.stops
+        c.index: list(coord.geo_held.get(c.index, [])) for c in coord.arms if "geometry" in c.stops
     }
-    if held:
-        who = "; ".join(f"{x!r} stopped by {', '.join(map(repr, ys))}" for x, ys in held.items())
-        return f"not completed: unresolved geometric deadlock (S2.6): {who}"
-    return "not completed when the simulation ended"
+    if a in held or _cycle(held):
+        cycle = _cycle(held)
+        names = p.arm_names
+        if cycle:
+            waits = " -> ".join(repr(names[x]) for x in cycle)
+        else:
+            waits = "; ".join(
+                f"{names[x]!r} waits for {', '.join(repr(names[y]) for y in ys)}"
+                for x, ys in sorted(held.items())
+            )
+        return "deadlock", f"unresolved geometric deadlock (S2.6), wait-for: {waits}"
+    # nothing explains it: an arm had work, no stop in force and no event
+    # pending -- a stall of the simulator itself
+    ctl = coord.arms[a]
+    doing = f"task {p.task_names[ctl.leg.task]!r}" if ctl.leg is not None else "no trajectory"
+    text = (
+        f"stall: arm {p.arm_names[a]!r} stood still with work left ({doing}, task "
+        f"{p.task_names[t]!r} {coord.status[t]}), no stop in force and no event pending"
+    )
+    if strict:
+        raise InternalError(f"simulate: {text} (please report)")
+    return "stall", text
