@@ -309,7 +309,7 @@ class ArmController:
         Sampling period, seconds (for the pipeline offset).
     ticker : Ticker, optional
         The shared tick driver when every controller tick is modelled
-        (``simulate(..., tick=...)``); ``None`` at event level.
+        (``SimOptions(tick=...)``); ``None`` at event level.
     force_threshold : float
         The wrist force sensor's free-motion threshold, newtons (S1.7).
 

@@ -60,7 +60,7 @@ KINDS: tuple[str, ...] = (
 )
 """Every kind of trace record (``"force"``: the wrist force sensor's
 thresholds set and forces read during an insertion search, S1.7, with
-``simulate(..., insertion="drawn")``; :mod:`workcell.sim.force`;
+``SimOptions(insertion="drawn")``; :mod:`workcell.sim.force`;
 ``"drop"``: a frame dropped at its receiver, a duplicate or older than the
 withdrawal of its task, by the links' sequence numbers)."""
 

@@ -34,6 +34,7 @@ from workcell.sim import (
     IdealMedium,
     LatePart,
     MessageLoss,
+    SimOptions,
     simulate,
 )
 from workcell.sim.coordinator import CAUSE_KINDS
@@ -66,7 +67,7 @@ def serial_run(scara4: Any, scara4_plan: Any) -> Any:
     """scara4 on the serial bus, no fault: execution lags the plan (every
     message takes milliseconds), so arms are sent tasks whose predecessors
     on other arms are still running and stand at their starts and borders."""
-    return simulate(scara4, scara4_plan, medium=SERIAL, monitor=False)
+    return simulate(scara4, scara4_plan, medium=SERIAL, options=SimOptions(monitor=False))
 
 
 SERIAL = "serial-bus"
@@ -127,8 +128,8 @@ def test_an_emergency_stop_reaching_an_arm_at_its_station_is_released(
             scara4,
             scara4_plan,
             medium=SERIAL,
-            monitor=False,
             faults=[EmergencyStop(w.time - 0.1, 1.0)],
+            options=SimOptions(monitor=False),
         )
         assert _failed(r) == {}, f"e-stop just before the wake-up at {w.time}"
         clears = [e for e in r.trace if e.kind == "message" and e.detail.startswith("alarm_clear")]
@@ -144,10 +145,15 @@ def test_an_activation_exactly_at_a_task_end_releases_every_arm_it_stopped(
     """Ideal medium: a zone activation falls exactly on the end of a task (the
     coordinator still believes the arm busy, the arm is done when the stop
     reaches it). Every stop is matched by a wake-up: all tasks complete."""
-    nominal = simulate(scara4, scara4_plan, monitor=False).tasks_frame()
+    nominal = simulate(scara4, scara4_plan, options=SimOptions(monitor=False)).tasks_frame()
     zones = tuple(scara4.cell.zone_map.zone_names())
     for at in sorted(set(nominal["end"]))[:2]:
-        r = simulate(scara4, scara4_plan, monitor=False, faults=[ActivateZones(at, zones)])
+        r = simulate(
+            scara4,
+            scara4_plan,
+            faults=[ActivateZones(at, zones)],
+            options=SimOptions(monitor=False),
+        )
         assert _failed(r) == {}, f"activation at the task end {at}"
 
 
@@ -168,9 +174,8 @@ def test_without_re_solving_a_surviving_arm_is_not_stranded_by_a_failed_arm(
         scara4,
         scara4_plan,
         medium=SERIAL,
-        monitor=False,
-        resolve=False,
         faults=[ArmFailure(arm, s + 0.6 * (e - s))],
+        options=SimOptions(monitor=False, resolve=False),
     )
     out = r.tasks_frame().set_index("task")
     free = _doable(scara4, scara4_plan, r, arm)
@@ -194,7 +199,9 @@ def test_a_withdrawal_is_not_overtaken_by_the_retransmitted_trajectory(
     tf = serial_run.tasks_frame().set_index("task")
     s, e = float(tf.loc[task, "start"]), float(tf.loc[task, "end"])
     loss = MessageLoss(0.7, kinds=("trajectory",), timeout=2.0)
-    lossy = simulate(scara4, scara4_plan, medium=SERIAL, seed=0, monitor=False, faults=[loss])
+    lossy = simulate(
+        scara4, scara4_plan, medium=SERIAL, seed=0, faults=[loss], options=SimOptions(monitor=False)
+    )
     lost = [
         ev.time
         for ev in lossy.trace
@@ -208,8 +215,8 @@ def test_a_withdrawal_is_not_overtaken_by_the_retransmitted_trajectory(
             scara4_plan,
             medium=SERIAL,
             seed=0,
-            monitor=False,
             faults=[loss, ArmFailure(arm, at + 0.01)],
+            options=SimOptions(monitor=False),
         )
         assert _failed(r) == {}, at  # the re-solve gives the failed arm's work to others
         drops = [ev for ev in r.trace if ev.kind == "drop"]
@@ -232,7 +239,7 @@ def test_a_part_late_from_time_zero_holds_back_its_task(
     part = next(x for x, at in sorted(arrivals.items()) if at == 0.0)
     gated = [t.id for t in ts.tasks if part in ts.gating_parts(t.id)]
     assert gated
-    r = simulate(cell, plan, faults=[LatePart(part, 5.0)], resolve=resolve)
+    r = simulate(cell, plan, faults=[LatePart(part, 5.0)], options=SimOptions(resolve=resolve))
     tf = r.tasks_frame().set_index("task")
     assert _failed(r) == {}
     assert (tf.loc[gated, "start"] >= 5.0 - 1e-9).all(), tf.loc[gated, "start"]
@@ -254,14 +261,16 @@ def test_a_stall_is_named_and_strict_runs_raise(scara4: Any, scara4_plan: Any) -
     """An arm that has work, no stop in force and no event pending (here made
     by a medium that loses grants silently) is a stall: its task fails with
     a cause of kind "stall" naming it, and ``strict`` raises InternalError."""
-    r = simulate(scara4, scara4_plan, medium=_LosesGrants, monitor=False)
+    r = simulate(scara4, scara4_plan, medium=_LosesGrants, options=SimOptions(monitor=False))
     tf = r.tasks_frame()
     stalls = tf[tf["cause_kind"] == "stall"]
     assert len(stalls) > 0
     assert stalls["cause"].str.startswith("stall: arm ").all()
     assert not tf["cause"].str.contains(UNEXPLAINED).any()
     with pytest.raises(InternalError, match="stall"):
-        simulate(scara4, scara4_plan, medium=_LosesGrants, monitor=False, strict=True)
+        simulate(
+            scara4, scara4_plan, medium=_LosesGrants, options=SimOptions(monitor=False, strict=True)
+        )
 
 
 @pytest.mark.parametrize("episode", range(8))
@@ -296,9 +305,7 @@ def test_random_fault_plans_end_with_every_failure_explained(
         seed=episode,
         faults=faults,
         medium=medium,
-        resolve=resolve,
-        monitor=False,
-        strict=True,
+        options=SimOptions(resolve=resolve, monitor=False, strict=True),
     )
     tf = r.tasks_frame()
     failed = tf[tf["status"] == "failed"]
