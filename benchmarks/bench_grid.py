@@ -55,11 +55,11 @@ def _run(cc: Any, evaluations: int) -> tuple[float, Any]:
 def _monitor(cc: Any, plan: Any) -> tuple[str, float, int]:
     """The plan under the safety monitor alone, then with the defaults
     (verdict, executed makespan, tasks done)."""
-    from workcell import simulate
+    from workcell import SimOptions, simulate
     from workcell.sim.monitor import SafetyViolation
 
     try:
-        simulate(cc, plan, seed=0, _geometry=False)
+        simulate(cc, plan, seed=0, options=SimOptions(geometry_guard=False))
         verdict = "clean"
     except SafetyViolation:
         verdict = "collision"

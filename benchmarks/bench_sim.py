@@ -13,7 +13,7 @@ Side by side in one run, on one plan (the tree search's, seeded):
   stopping an arm, an arm failing for good) run twice with the same faults:
   with re-solving (the coordinator asks :func:`scheduler.reschedule` for a
   new plan within its real-time budget) and without (``simulate(...,
-  resolve=False)``: the coordinator keeps the plan and waits; an arm failure
+  options=SimOptions(resolve=False))``: the coordinator keeps the plan and waits; an arm failure
   then leaves its tasks failed). Reported:
   the re-solve latency (p50/p99 over every re-solve of every scenario) and
   the executed makespan and failed tasks with and without re-solving.
@@ -46,6 +46,7 @@ from multiarm.errors import MultiarmError
 from scheduler import solve, validate
 from workcell import compile_cell, load_example
 from workcell.sim.faults import FaultPlan
+from workcell.sim.options import SimOptions
 from workcell.sim.run import simulate
 
 NAME = "sim"
@@ -59,7 +60,7 @@ def _speed(cc: Any, plan: Any, repeat: int, **kw: Any) -> dict[str, Any]:
     last = None
     for _ in range(repeat):
         t0 = time.perf_counter()
-        last = simulate(cc, plan, seed=0, **kw)
+        last = simulate(cc, plan, seed=0, options=SimOptions(**kw))
         wall = time.perf_counter() - t0
         walls.append(wall)
         rates.append(float(last.metrics.executed_makespan) / wall)
@@ -136,7 +137,13 @@ def _faulty_run(
     (``resolve=False``: the coordinator keeps the plan)."""
     try:
         with _wall_cap(cap):
-            r = simulate(cc, plan, seed=seed, faults=faults, monitor=False, resolve=resolve)
+            r = simulate(
+                cc,
+                plan,
+                seed=seed,
+                faults=faults,
+                options=SimOptions(monitor=False, resolve=resolve),
+            )
     except _Overrun:
         return {
             "makespan": math.nan,
@@ -183,7 +190,8 @@ def measure(
         raise MultiarmError(f"cell {cell!r}: the tree search found no plan in {time_limit:g} s")
     plan = r.schedule
     planned = validate(p, plan)
-    simulate(cc, plan, seed=0, monitor=False)  # warm caches and compiled code once
+    # warm caches and compiled code once
+    simulate(cc, plan, seed=0, options=SimOptions(monitor=False))
 
     print("bench_sim: event level", file=sys.stderr, flush=True)
     event = _speed(cc, plan, repeat, monitor=False)
@@ -319,7 +327,7 @@ def table(r: Any) -> str:
         "Without re-solving the coordinator keeps the plan: late parts and stops push the "
         "following tasks back, and a failed arm's tasks and the tasks after them are reported "
         "failed while the other arms go on (the makespan is then over the tasks that ran). "
-        "Without re-solving is `simulate(..., resolve=False)`.",
+        "Without re-solving is `simulate(..., options=SimOptions(resolve=False))`.",
     ]
     return "\n".join(lines) + "\n"
 

@@ -4,7 +4,7 @@ against FCL on the meshes, side by side in one run.
 ``python -m benchmarks.bench_urdf [--quick]`` writes ``results/urdf.md`` and
 ``results/urdf.json``:
 
-1. Compile time per cell and per mode (``workcell.compile_cell_detailed``),
+1. Compile time per cell and per mode (``workcell.compile_cell``),
    cold (first in the process) and warm, for ``urdf_cell`` (two UR5 and a
    Panda from URDF) next to ``cell8`` (whose serial arms are DH chains).
 2. Kinematics per call: forward kinematics of a batch and IK of one pose,
@@ -31,7 +31,7 @@ import numpy as np
 
 from benchmarks.common import output_dir, write
 from multiarm.errors import Unreachable
-from workcell import compile_cell_detailed, load_example
+from workcell import compile_cell, load_example
 
 
 def compile_rows(cells: tuple[str, ...]) -> list[dict[str, Any]]:
@@ -39,10 +39,10 @@ def compile_rows(cells: tuple[str, ...]) -> list[dict[str, Any]]:
     for name in cells:
         cell = load_example(name)
         t0 = time.perf_counter()
-        cc = compile_cell_detailed(cell)
+        cc = compile_cell(cell)
         cold = time.perf_counter() - t0
         t0 = time.perf_counter()
-        compile_cell_detailed(cell)
+        compile_cell(cell)
         warm = time.perf_counter() - t0
         m = cc.problem.n_modes
         rows.append(

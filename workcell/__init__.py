@@ -44,6 +44,7 @@ from workcell.sim.faults import (
     MessageLoss,
 )
 from workcell.sim.network.dcr import dcr_bound
+from workcell.sim.options import SimOptions
 from workcell.sim.run import SimResult, simulate
 
 __all__ = [
@@ -61,6 +62,7 @@ __all__ = [
     "LatePart",
     "LostSync",
     "MessageLoss",
+    "SimOptions",
     "SimResult",
     "cell_from_dict",
     "compile_cell",

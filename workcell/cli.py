@@ -101,6 +101,7 @@ def _demo_cell(cell: Any, args: argparse.Namespace, out: Path) -> tuple[dict[str
     import time
 
     from scheduler import lower_bound, solve, validate
+    from workcell.sim.options import SimOptions
     from workcell.sim.run import simulate
 
     print(f"\n== {cell.name}: {cell.description}")
@@ -206,7 +207,7 @@ def _demo_cell(cell: Any, args: argparse.Namespace, out: Path) -> tuple[dict[str
                     seed=args.seed,
                     faults=plan_faults,
                     medium=args.network,
-                    monitor=not args.no_monitor,
+                    options=SimOptions(monitor=not args.no_monitor),
                 )
             except MultiarmError as exc:  # e.g. the safety monitor: loud, and the demo goes on
                 stopped[label] = str(exc)
@@ -591,6 +592,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     faults = _load_faults(args.faults) if args.faults else None
     out = _out_dir(args.out or str(Path("out") / cell.name))
     from scheduler import solve, validate
+    from workcell.sim.options import SimOptions
     from workcell.sim.run import simulate
 
     bar = _progress(4, cell.name)
@@ -618,9 +620,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             seed=args.seed,
             faults=faults,
             medium=args.network,
-            tick=args.tick,
-            monitor=not args.no_monitor,
-            insertion=args.insertion,
+            options=SimOptions(
+                tick=args.tick, monitor=not args.no_monitor, insertion=args.insertion
+            ),
         )
         bar.update(1)
         bar.set_postfix_str("plots")

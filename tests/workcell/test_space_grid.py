@@ -15,7 +15,7 @@ import pytest
 
 from multiarm.errors import ValidationError
 from scheduler import solve
-from workcell import compile_cell, load_example, simulate
+from workcell import SimOptions, compile_cell, load_example, simulate
 from workcell.geometry.reach import block_name, shared_blocks
 from workcell.sim.monitor import SafetyViolation
 
@@ -25,7 +25,7 @@ def test_plans_with_the_space_grid_never_collide(name: str) -> None:
     cc = compile_cell(load_example(name))
     assert any(z.startswith("grid_") for z in cc.problem.zone_names)
     plan = solve(cc.problem, "greedy", seed=0).schedule
-    run = simulate(cc, plan, seed=0, _geometry=False)  # the monitor is on
+    run = simulate(cc, plan, seed=0, options=SimOptions(geometry_guard=False))  # the monitor is on
     assert run.metrics.executed_makespan == pytest.approx(run.metrics.planned_makespan, abs=1e-6)
 
 
@@ -36,7 +36,7 @@ def test_without_the_space_grid_the_same_cells_collide(name: str) -> None:
     assert not any(z.startswith("grid_") for z in cc.problem.zone_names)
     plan = solve(cc.problem, "greedy", seed=0).schedule
     with pytest.raises(SafetyViolation, match="collide"):
-        simulate(cc, plan, seed=0, _geometry=False)
+        simulate(cc, plan, seed=0, options=SimOptions(geometry_guard=False))
 
 
 def test_blocks_cover_exactly_the_shared_region() -> None:

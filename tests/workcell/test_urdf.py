@@ -290,7 +290,7 @@ def test_urdf_cell_compiles_schedules_and_simulates_cleanly() -> None:
 
     cell = load_example("urdf_cell")
     assert [a.kind for a in cell.arms] == ["urdf"] * 3
-    cc = workcell.compile_cell_detailed(cell)
+    cc = workcell.compile_cell(cell)
     result = solve(cc.problem, "tree", seed=0, time_limit=10.0)
     schedule = result.schedule
     assert schedule is not None

@@ -448,17 +448,17 @@ def simulate_episode(cc: CampaignCell, episode: Episode) -> SimResult:
     -------
     SimResult
     """
+    from workcell.sim.options import SimOptions
     from workcell.sim.run import simulate
 
-    # the only centralized policy today is simulate's own; once simulate takes
-    # coordination=, pass coordination=episode.coordination here
     return simulate(
         cc.compiled,
         cc.schedule,
         seed=episode.sim_seed,
         faults=episode.faults,
         medium=episode.medium,
-        resolve=episode.resolve,
+        coordination=episode.coordination,
+        options=SimOptions(resolve=episode.resolve),
     )
 
 

@@ -40,6 +40,7 @@ from workcell.sim.medium import (
 )
 from workcell.sim.monitor import SafetyViolation
 from workcell.sim.network.dcr import dcr_bound
+from workcell.sim.options import SimOptions
 from workcell.sim.run import SimResult, simulate
 from workcell.sim.trace import Metrics, Trace, TraceEvent
 
@@ -65,6 +66,7 @@ __all__ = [
     "Metrics",
     "Process",
     "SafetyViolation",
+    "SimOptions",
     "SimResult",
     "Trace",
     "TraceEvent",

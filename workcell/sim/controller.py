@@ -309,7 +309,7 @@ class ArmController:
         Sampling period, seconds (for the pipeline offset).
     ticker : Ticker, optional
         The shared tick driver when every controller tick is modelled
-        (``simulate(..., tick=...)``); ``None`` at event level.
+        (``SimOptions(tick=...)``); ``None`` at event level.
     force_threshold : float
         The wrist force sensor's free-motion threshold, newtons (S1.7).
 
@@ -357,6 +357,7 @@ class ArmController:
         self.t_ref = 0.0
         self.running = False
         self.stops: set[str] = set()  # reasons for an unplanned stop
+        self.released_stops: set[str] = set()  # coordinator stops released, by id
         self.at_station = False  # stopped at station k, waiting for its conditions
         self.granted: set[Piece] = set()
         self.permit: set[int] = set()  # tasks the coordinator allowed to start
@@ -480,13 +481,20 @@ class ArmController:
             self.notify()
 
     def _unpause(self, reason: str) -> None:
+        """End the stop ``reason``; with no stop left the arm goes on: it
+        moves again, or, standing at a station, tries its pass again (the
+        grants and permissions that came during the stop count)."""
         self.stops.discard(reason)
         if self._extra is not None and self._extra_h is None and self.stops == {"search"}:
             if not self.failed:
                 self._extra_due = self.kernel.now + float(self._extra[4])
                 self._extra_h = self.kernel.schedule(float(self._extra[4]), self._extra_try)
             return
-        if not self.stops and self.leg is not None and not self.running and not self.at_station:
+        if self.stops or self.leg is None or self.running:
+            return
+        if self.at_station:
+            self._try_pass()
+        else:
             self._run()
 
     def _run(self) -> None:
@@ -730,10 +738,10 @@ class ArmController:
                 self.permit.add(int(payload[2]))
             elif isinstance(payload, tuple) and payload and payload[0] == "alarm_clear":
                 self.internal("CONTINUE", detail="alarm cleared")
-                self._unpause("alarm")
+                self._release_stop(f"alarm#{payload[1]}")
                 return
             elif isinstance(payload, tuple) and payload and payload[0] == "activation":
-                self._unpause("activation")
+                self._release_stop(f"activation#{payload[1]}")
                 return
             else:
                 self.granted.add(payload)
@@ -743,7 +751,7 @@ class ArmController:
         elif kind == "sleep":
             if isinstance(payload, tuple) and payload and payload[0] == "activation":
                 self.internal("STOP_C", detail="zone activation: stop")
-                self._pause("activation")
+                self._stop_by_id(f"activation#{payload[1]}")
                 self._report_stop()
                 self.send(self.station, 0, "position", (None, self.flange()))
             elif isinstance(payload, tuple) and payload and payload[0] == "withdraw":
@@ -752,10 +760,23 @@ class ArmController:
                 self.internal("STOP_C", detail="zone not available: stop at its border")
         elif kind == "alarm":
             self.internal("STOP_C", detail="emergency broadcast")
-            self._pause("alarm")
+            self._stop_by_id(f"alarm#{payload[1]}")
             self._report_stop()
         elif kind == "active_zone_grant":
             pass
+
+    def _stop_by_id(self, stop: str) -> None:
+        """A coordinator's stop (``"alarm#<id>"``, ``"activation#<id>"``): in
+        force until the release with the same id (a release that overtook
+        its stop on the medium cancels it in advance)."""
+        if stop in self.released_stops:
+            return
+        self._pause(stop)
+
+    def _release_stop(self, stop: str) -> None:
+        """The release of the coordinator's stop ``stop`` (matched by id)."""
+        self.released_stops.add(stop)
+        self._unpause(stop)
 
     def _withdraw(self, t: int) -> None:
         """Drop the not yet started task ``t`` (the plan changed)."""
@@ -937,8 +958,6 @@ class ArmController:
     def _resume(self, reason: str) -> None:
         """End an unplanned stop, also when standing at a station."""
         self._unpause(reason)
-        if not self.stops and self.at_station:
-            self._try_pass()
 
     # --------------------------------------------------- force sensing (S1.7)
     def read_force(self, axis: int) -> float:

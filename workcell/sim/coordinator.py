@@ -72,7 +72,22 @@ from workcell.sim.trace import Trace
 from zones import ZoneManager
 from zones.manager import Deadlock, ReportOnly, Wake
 
-__all__ = ["FAR", "Coordinator", "GeometryGuard", "Network"]
+__all__ = ["CAUSE_KINDS", "FAR", "Coordinator", "GeometryGuard", "Network"]
+
+CAUSE_KINDS: tuple[str, ...] = (
+    "arm_failed",
+    "part_missing",
+    "deadlock",
+    "insertion",
+    "predecessor",
+    "arm_out",
+    "stall",
+)
+"""The categories of a failed task's cause (``SimResult.tasks_frame()``
+column ``cause_kind``): every capable arm failed; a part never came; a
+deadlock (with its wait-for cycle); its insertion failed; a predecessor
+could not run; its arm failed with re-solving off; the run stalled (an arm
+with work, no stop in force and no event pending: a bug of the simulator)."""
 
 FAR = 1e7
 """Seconds: where a re-solve puts tasks that can never run (no working arm,
@@ -109,6 +124,14 @@ class Network:
         self.loss = loss
         self.rng = rng
         self.receivers: dict[int, Callable[[Frame], None]] = {}
+        self._next_seq: dict[tuple[int, int], int] = {}
+        self._seen: dict[tuple[int, int, int], set[int]] = {}
+        """(src, dst as sent, receiving station) -> sequence numbers delivered."""
+        self._cancelled: dict[tuple[int, int], int] = {}
+        """(receiving station, task) -> sequence number of its withdrawal."""
+        self.stale = 0
+        """Frames dropped at the receiver: duplicates and frames older than a
+        withdrawal of their task."""
         self.sent = 0
         self.retransmissions = 0
         self.delays: list[float] = []
@@ -116,10 +139,19 @@ class Network:
             medium.attach(st, self._receiver(st))
         medium.on_drop(self._dropped)
 
-    def send(self, src: int, dst: int, kind: str, payload: Any, retry: int = 0) -> None:
-        """Send a frame now (``dst`` may be BROADCAST)."""
+    def send(
+        self, src: int, dst: int, kind: str, payload: Any, retry: int = 0, seq: int = -1
+    ) -> None:
+        """Send a frame now (``dst`` may be BROADCAST).
+
+        Each link ``(src, dst)`` numbers its frames 0, 1, 2, ...; a
+        retransmission (``retry > 0``) keeps the number of the original
+        (``seq``)."""
         size = trajectory_bytes(5) if kind == "trajectory" else MESSAGE_BYTES[kind]
-        frame = Frame(src=src, dst=dst, size=size, kind=kind, payload=(payload, retry))
+        if seq < 0:
+            seq = self._next_seq.get((src, dst), 0)
+            self._next_seq[(src, dst)] = seq + 1
+        frame = Frame(src=src, dst=dst, size=size, kind=kind, payload=(payload, retry), seq=seq)
         self.sent += 1
         if retry:
             self.retransmissions += 1
@@ -140,7 +172,7 @@ class Network:
                 size=size,
                 detail=f"message lost or corrupted; sent again after {lp.timeout:g} s",
             )
-            self.kernel.schedule(lp.timeout, self.send, src, dst, kind, payload, retry + 1)
+            self.kernel.schedule(lp.timeout, self.send, src, dst, kind, payload, retry + 1, seq)
             return
         self.medium.send(frame)
 
@@ -154,8 +186,39 @@ class Network:
 
         return rx
 
+    def _stale(self, frame: Frame, payload: Any, station: int) -> str:
+        """Why the receiver drops ``frame`` ("" if it does not)."""
+        seen = self._seen.setdefault((frame.src, frame.dst, station), set())
+        if frame.seq in seen:
+            return f"duplicate (sequence number {frame.seq})"
+        seen.add(frame.seq)
+        task = _frame_task(frame.kind, payload)
+        if task < 0 or frame.src != 0:
+            return ""
+        if frame.kind == "sleep" and payload[0] == "withdraw":
+            self._cancelled[(station, task)] = frame.seq
+            return ""
+        cut = self._cancelled.get((station, task), -1)
+        if frame.seq < cut:
+            return f"older than the withdrawal of task {task} (sequence number {frame.seq} < {cut})"
+        return ""
+
     def _deliver(self, frame: Frame, t: float, station: int) -> None:
         payload: Any = frame.payload[0]  # type: ignore[index]
+        why = self._stale(frame, payload, station)
+        if why:
+            self.stale += 1
+            self.trace.add(
+                t,
+                "drop",
+                arm=self._arm_of(frame.src, station),
+                message=frame.kind,
+                src=frame.src,
+                dst=station,
+                size=frame.size,
+                detail=f"dropped at the receiver: {why}",
+            )
+            return
         delay = t - frame.send_time
         self.delays.append(delay)
         dst = station
@@ -189,7 +252,7 @@ class Network:
             detail=f"dropped by the medium ({reason}); sent again after {timeout:g} s",
         )
         self.kernel.schedule(
-            timeout, self.send, frame.src, frame.dst, frame.kind, payload, retry + 1
+            timeout, self.send, frame.src, frame.dst, frame.kind, payload, retry + 1, frame.seq
         )
 
 
@@ -355,6 +418,22 @@ class GeometryGuard:
         return False
 
 
+def _frame_task(kind: str, payload: Any) -> int:
+    """The task a coordinator frame is about (-1: none): a trajectory's, a
+    grant's or wake-up's piece ``(kind, index, task, tau)``, a start
+    permission or a withdrawal."""
+    if kind == "trajectory":
+        return int(payload[0][-1].task)
+    if (
+        kind in ("zone_grant", "wake_up", "sleep")
+        and isinstance(payload, tuple)
+        and len(payload) == 4
+        and payload[0] in ("zone", "move", "tool", "start", "withdraw")
+    ):
+        return int(payload[2])
+    return -1
+
+
 def _describe(payload: Any) -> str:
     if isinstance(payload, tuple) and len(payload) == 4 and isinstance(payload[0], str):
         return f"{payload[0]} {payload[1]} task {payload[2]} at {payload[3]:.6g}"
@@ -423,6 +502,8 @@ class Coordinator:
         T, A = p.n_tasks, p.n_arms
         self.status = ["pending"] * T
         self.cause = [""] * T
+        self.cause_kind = [""] * T
+        """Per failed task, the category of its cause (:data:`CAUSE_KINDS`)."""
         self.release = np.asarray(p.task_release, dtype=float).copy()
         self.late: dict[int, float] = {}
         self.permitted: set[int] = set()
@@ -444,7 +525,12 @@ class Coordinator:
         self.resolve_latency: list[float] = []
         self.resolves = 0
         self.detours = 0
-        self.alarm = False
+        self.alarms: set[int] = set()
+        """Emergency stops in force (by id)."""
+        self._stop_ids = itertools.count(1)
+        self.activation_id = 0
+        self.activation_slept: set[int] = set()
+        """Arms told to stop for the pending activation (each is woken after it)."""
         zm = compiled.cell.zone_map
         start_in: dict[Any, list[str | int]] = {
             a: [p.zone_names[z] for z in p.arm_start_zones[a]]
@@ -1040,6 +1126,7 @@ class Coordinator:
         now = self.kernel.now
         self.status[t] = "failed"
         self.cause[t] = cause
+        self.cause_kind[t] = "insertion"
         self.stalled = 0
         self.arm_busy[a] = False
         self.trace.add(now, "task_failed", arm=p.arm_names[a], task=p.task_names[t], detail=cause)
@@ -1055,6 +1142,7 @@ class Coordinator:
             self.status[s] = "failed"
             if not self.cause[s]:
                 self.cause[s] = f"predecessor {p.task_names[t]!r} failed: {cause}"
+                self.cause_kind[s] = "predecessor"
             self.trace.add(now, "task_failed", task=p.task_names[s], detail=self.cause[s])
             stack.extend(p.task_succs[s])
         self._build_orders()
@@ -1070,16 +1158,19 @@ class Coordinator:
     def emergency_stop(self, duration: float) -> None:
         """Broadcast the alarm; clear it ``duration`` seconds later."""
         self.trace.add(self.kernel.now, "fault", detail=f"emergency stop for {duration:g} s")
-        self.alarm = True
-        self.net.send(0, BROADCAST, "alarm", ("emergency",))
-        self.kernel.schedule(duration, self._clear_alarm)
+        stop = next(self._stop_ids)
+        self.alarms.add(stop)
+        self.net.send(0, BROADCAST, "alarm", ("emergency", stop))
+        self.kernel.schedule(duration, self._clear_alarm, stop)
 
-    def _clear_alarm(self) -> None:
-        self.alarm = False
+    def _clear_alarm(self, stop: int) -> None:
+        """Release the emergency stop ``stop`` at every working arm (matched
+        by id: an arm stays stopped while any alarm is in force)."""
+        self.alarms.discard(stop)
         self.trace.add(self.kernel.now, "fault", detail="emergency stop cleared")
         for a in range(self.p.n_arms):
             if a not in self.failed_arms:
-                self.net.send(0, a + 1, "wake_up", ("alarm_clear",))
+                self.net.send(0, a + 1, "wake_up", ("alarm_clear", stop))
 
     def arm_failed(self, a: int) -> None:
         """Arm ``a`` failed: give back its resources, reassign its tasks."""
@@ -1139,14 +1230,22 @@ class Coordinator:
         self._serve_all()
 
     def part_late(self, tasks: list[int], arrival: float, part: str) -> None:
-        """Part ``part`` will come at ``arrival`` (inf: never) for ``tasks``."""
+        """Part ``part`` will come at ``arrival`` (inf: never) for ``tasks``.
+
+        A gated task already dispatched with its start permitted has the
+        permission revoked: it is withdrawn (its arm has not started it)
+        and dispatched again under the new release."""
         for t in tasks:
             if self.status[t] in ("done", "running"):
                 continue
             self.release[t] = max(self.release[t], arrival)
+            if self.status[t] == "dispatched" and t in self.permitted:
+                self._withdraw(t)
+                self.status[t] = "pending"
             self.late[t] = arrival
             if math.isinf(arrival):
                 self.cause[t] = f"part {part!r} never arrived"
+                self.cause_kind[t] = "part_missing"
             else:
                 self.kernel.schedule(arrival, self._on_release, t, absolute=True)
         when = "never comes" if math.isinf(arrival) else f"comes at {arrival:.6g} s"
@@ -1163,6 +1262,7 @@ class Coordinator:
                 self.status[t] = "failed"
                 if not self.cause[t]:
                     self.cause[t] = f"predecessor failed: part {part!r} never arrived"
+                    self.cause_kind[t] = "predecessor"
                 self.trace.add(
                     self.kernel.now, "task_failed", task=self.p.task_names[t], detail=self.cause[t]
                 )
@@ -1176,17 +1276,23 @@ class Coordinator:
 
     def activate(self, zones: tuple[str, ...]) -> None:
         """Change the active zones once every arm has stopped (S2.5)."""
+        if self.activation is None:  # else: the pending change is replaced
+            self.activation_id = next(self._stop_ids)
+            self.activation_acks = set()
+            self.activation_slept = set()
         self.activation = zones
-        self.activation_acks = set()
         for a in range(self.p.n_arms):
             h = self.dispatch_h[a]
             if h is not None:
                 h.cancel()
                 self.dispatch_h[a] = None
+            if a in self.activation_acks or a in self.activation_slept:
+                continue
             if a in self.failed_arms or not self.arm_busy[a]:
                 self.activation_acks.add(a)
             else:
-                self.net.send(0, a + 1, "sleep", ("activation",))
+                self.activation_slept.add(a)
+                self.net.send(0, a + 1, "sleep", ("activation", self.activation_id))
         self._try_activation()
 
     def _try_activation(self) -> None:
@@ -1206,8 +1312,11 @@ class Coordinator:
             if a in self.failed_arms:
                 continue
             self.net.send(0, a + 1, "active_zone_grant", ("zones", zones))
-            if self.arm_busy[a]:
-                self.net.send(0, a + 1, "wake_up", ("activation",))
+            # every arm told to stop is released, busy or not by now (its task
+            # may have ended while the stop was on its way)
+            if a in self.activation_slept:
+                self.net.send(0, a + 1, "wake_up", ("activation", self.activation_id))
+        self.activation_slept = set()
         for a in range(self.p.n_arms):
             self._dispatch_next(a)
 
@@ -1228,6 +1337,17 @@ class Coordinator:
         self.task_pieces.pop(t, None)
         self.permitted.discard(t)
         self.net.send(0, a + 1, "sleep", ("withdraw", -1, t, 0.0))
+
+    def _withdraw_never(self) -> None:
+        """Take back the dispatched tasks that can no longer run under the
+        kept plan (a predecessor on a failed arm): their arms would wait at
+        their starts for good; freed, they go on with their other tasks."""
+        for t in sorted(self.never):
+            if self.status[t] == "dispatched":
+                self._withdraw(t)
+                self.status[t] = "pending"
+        for a in range(self.p.n_arms):
+            self._dispatch_next(a)
 
     # ------------------------------------------------------------ re-solve
     def _dead(self, frozen: Any = ()) -> set[int]:
@@ -1256,6 +1376,7 @@ class Coordinator:
         if not self.resolving:
             self.trace.add(now, "resolve", detail=f"{reason}: re-solving off; plan kept")
             self._build_orders()  # a failed arm's tasks no longer hold others back
+            self._withdraw_never()
             return
         frozen: dict[
             int | str, tuple[int, float, float] | tuple[int, float, float, list[float]]
@@ -1339,6 +1460,8 @@ class Coordinator:
         self.resolves += 1
         if new is None:
             self.trace.add(now, "resolve", detail=f"{reason}: re-solve failed: {err}; plan kept")
+            self._build_orders()
+            self._withdraw_never()
             return
         # withdraw dispatched tasks that were not frozen (their arm waits at the start)
         for t in range(p.n_tasks):

@@ -8,7 +8,7 @@ S1.7 commands as operations: "tell me the force on axis k"
 thresholds" (:meth:`~workcell.sim.controller.ArmController.set_thresholds`).
 
 * **Free motion.** The thresholds are low (:data:`FREE_THRESHOLD`, 5 N by
-  default; ``simulate(..., force_threshold=...)`` sets them for the whole
+  default; ``SimOptions(force_threshold=...)`` sets them for the whole
   cell or per arm): only inertial forces act, so a force above them is a
   crash, and the motor stops at once by itself (the reflex arc of S1.2); the
   coordinator is told afterwards.
@@ -21,7 +21,7 @@ thresholds" (:meth:`~workcell.sim.controller.ArmController.set_thresholds`).
 
 Insertion tries drawn at run time
 ---------------------------------
-With ``simulate(..., insertion="drawn")`` the hole's true lateral position
+With ``SimOptions(insertion="drawn")`` the hole's true lateral position
 error is drawn for every insert step of every task from a normal
 distribution (``insertion_sigma`` metres per axis, default
 :data:`HOLE_SIGMA`), from a random stream of its own derived from the
@@ -103,7 +103,7 @@ HOLE_SIGMA = 2.5e-4
 (per axis) when insertion tries are drawn."""
 
 INSERTION_MODES: tuple[str, ...] = ("planned", "drawn")
-"""Values of ``simulate(..., insertion=...)``."""
+"""Values of ``SimOptions(insertion=...)``."""
 
 _STREAM = 0x5F17
 """Tag of the insertion draws in each task's seed sequence (keeps them apart

@@ -139,6 +139,11 @@ class Frame:
         Set by :meth:`Medium.send` (NaN until sent).
     frame_id : int, optional
         Unique id, assigned at construction.
+    seq : int, optional
+        Sequence number on its link (sender, addressee), -1 when unused: a
+        retransmission keeps the original's number, so the receiver can drop
+        a duplicate or a frame older than a cancellation it already has
+        (:class:`workcell.sim.coordinator.Network`).
 
     Raises
     ------
@@ -154,6 +159,7 @@ class Frame:
     payload: object = None
     send_time: float = math.nan
     frame_id: int = field(default_factory=lambda: next(_ids))
+    seq: int = -1
 
     def __post_init__(self) -> None:
         if self.size <= 0:

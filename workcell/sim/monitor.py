@@ -30,7 +30,7 @@ Two forms share these rules:
   kernel process that checks *during* the run and stops it at the first
   violating sample, so nothing after a violation is simulated;
 * :class:`SafetyMonitor` checks a finished run from the arms' records
-  (``simulate(..., monitor="post")``); on the same run both report the same
+  (``SimOptions(monitor="post")``); on the same run both report the same
   first violation.
 
 Any violation fails the run loudly with :class:`SafetyViolation` (and is
@@ -57,7 +57,7 @@ the run if both uses still stand as predicted (a use that changed before
 is compared again from its record: an overlap that began in between is
 found at that wake, with the time it began). The monitor only reads, so a
 run it lets pass is the same run as without it (the same trace); the events
-it does not wake for (the controller ticks of ``simulate(..., tick=...)``,
+it does not wake for (the controller ticks of ``SimOptions(tick=...)``,
 messages) cost it nothing.
 """
 

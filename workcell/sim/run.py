@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -33,7 +34,7 @@ import numpy as np
 
 from multiarm.errors import InternalError, UsageError, ValidationError
 from multiarm.types import FloatArray
-from scheduler import Problem, Schedule, validate
+from scheduler import Plan, Problem, Schedule, validate
 from workcell.arms.profiles import StepperDrive
 from workcell.cell import Cell
 from workcell.compile import CompiledCell, compile_cell
@@ -51,23 +52,14 @@ from workcell.sim.faults import (
     MessageLoss,
     as_plan,
 )
-from workcell.sim.force import (
-    FREE_THRESHOLD,
-    HOLE_SIGMA,
-    check_insertion,
-    free_thresholds,
-    insert_searches,
-)
+from workcell.sim.force import free_thresholds, insert_searches
 from workcell.sim.kernel import Kernel
 from workcell.sim.medium import FixedLatencyMedium, IdealMedium, Medium
 from workcell.sim.monitor import LiveMonitor, SafetyMonitor
+from workcell.sim.options import CONTROL_TIME, COORDINATION_POLICIES, SimOptions
 from workcell.sim.trace import Metrics, Trace
 
-__all__ = ["CONTROL_TIME", "SimResult", "check_control_bound", "simulate"]
-
-CONTROL_TIME = 1.25e-4
-"""Seconds of one CPU's time to control one arm for one sampling period
-(S2.2: an i860 ran 8 four-axis SCARA arms at 1 ms, so at most 1/8 ms each)."""
+__all__ = ["CONTROL_TIME", "SimOptions", "SimResult", "check_control_bound", "simulate"]
 
 MediumSpec = str | Callable[[Kernel, int], Medium]
 
@@ -139,47 +131,38 @@ def _medium(spec: MediumSpec, kernel: Kernel, stations: int) -> Medium:
     raise UsageError(f"unknown medium {spec!r} (known: ideal, fixed)")
 
 
+@dataclass(frozen=True, slots=True, repr=False)
 class SimResult:
-    """What :func:`simulate` returns.
+    """What :func:`simulate` returns (a frozen record).
 
     Attributes
     ----------
     problem : scheduler.Problem
     schedule : scheduler.Schedule
         The plan given.
-    plan : scheduler.Schedule
-        The last plan the coordinator followed (after any re-solve).
+    plan : scheduler.Plan
+        The last plan the coordinator followed (after any re-solve), bound
+        to its problem (the type of ``scheduler.Result.plan``).
     executed : scheduler.Schedule or None
         What ran, when every task completed (else None).
     seed : int
     trace : Trace
     metrics : Metrics
+    monitor : LiveMonitor or None
+        The live safety monitor of the run (its counters), None when off.
     """
 
-    def __init__(
-        self,
-        problem: Problem,
-        schedule: Schedule,
-        plan: Schedule,
-        executed: Schedule | None,
-        seed: int,
-        trace: Trace,
-        metrics: Metrics,
-        tasks: list[dict[str, Any]],
-        reservations: list[dict[str, Any]],
-    ) -> None:
-        self.problem = problem
-        self.schedule = schedule
-        self.plan = plan
-        self.executed = executed
-        self.seed = seed
-        self.trace = trace
-        self.metrics = metrics
-        self._tasks = tasks
-        self._reservations = reservations
-        self._arms: list[ArmController] = []
-        self.monitor: LiveMonitor | None = None
-        """The live safety monitor of the run (its counters), None when off."""
+    problem: Problem
+    schedule: Schedule
+    plan: Plan
+    executed: Schedule | None
+    seed: int
+    trace: Trace
+    metrics: Metrics
+    monitor: LiveMonitor | None = None
+    _tasks: tuple[dict[str, Any], ...] = ()
+    _reservations: tuple[dict[str, Any], ...] = ()
+    _arms: tuple[ArmController, ...] = ()
 
     def joints(self, times: Sequence[float] | FloatArray) -> dict[str, FloatArray]:
         """Each arm's actual joints at ``times`` (seconds) as run: arm name ->
@@ -189,7 +172,9 @@ class SimResult:
 
     def tasks_frame(self) -> Any:
         """One row per task: task, arm, mode, planned_start, planned_end,
-        start, end, status ("done" | "failed"), cause."""
+        start, end, status ("done" | "failed"), cause (text) and cause_kind
+        (its category, one of :data:`~workcell.sim.coordinator.CAUSE_KINDS`;
+        "" for a task done)."""
         import pandas as pd
 
         cols = [
@@ -202,6 +187,7 @@ class SimResult:
             "end",
             "status",
             "cause",
+            "cause_kind",
         ]
         return pd.DataFrame(self._tasks, columns=cols)
 
@@ -282,23 +268,12 @@ def _check_faults(plan: FaultPlan, cc: CompiledCell) -> None:
 def simulate(
     cell: Cell | CompiledCell,
     schedule: Schedule,
+    *,
     seed: int = 0,
     faults: FaultPlan | Sequence[Fault] | Sequence[Mapping[str, Any]] | None = None,
     medium: MediumSpec = "ideal",
-    *,
-    resolve: bool = True,
-    resolve_budget: float = 0.015,
-    resolve_evaluations: int | None = None,
-    tick: float | None = None,
-    monitor: bool | str = True,
-    monitor_period: float = 0.02,
-    control_time: float = CONTROL_TIME,
-    insertion: str = "planned",
-    insertion_sigma: float = HOLE_SIGMA,
-    insertion_tolerance: float | None = None,
-    force_threshold: float | Mapping[str, float] = FREE_THRESHOLD,
-    _zone_checks: bool = True,
-    _geometry: bool = True,
+    coordination: str = "centralized",
+    options: SimOptions | None = None,
 ) -> SimResult:
     """Execute ``schedule`` in the simulated cell (S2.3-S2.7, S2.12).
 
@@ -309,59 +284,20 @@ def simulate(
     schedule : scheduler.Schedule
         A schedule of the cell's problem (checked with :func:`scheduler.validate`).
     seed : int
-        Seeds every random draw (message loss); the same seed gives the same
-        trace bit for bit.
+        Seeds every random draw (message loss, drawn insertions); the same
+        seed gives the same trace bit for bit.
     faults : FaultPlan, list of fault records or of dicts, optional
     medium : str or callable
         A medium name (``"ideal"``, ``"fixed"`` and the names of
         :mod:`workcell.sim.network`) or ``factory(kernel, stations) -> Medium``.
         Station 0 is the coordinator, station ``i`` the ``i``-th arm.
-    resolve : bool
-        Re-solve (:func:`scheduler.reschedule`) when an arm fails, a part
-        comes late or a detour costs more than planned. ``False`` keeps the
-        plan: the following tasks wait, a failed arm's tasks are reported
-        failed (for comparing runs with and without re-solving).
-    resolve_budget : float
-        Real-time budget of one re-solve, seconds (latency measured and
-        reported against it; decisions never depend on wall time).
-    resolve_evaluations : int, optional
-        Work limit of one re-solve (schedules decoded by the local search);
-        default ``max(5, 2000 // tasks)`` (decoding one schedule of 200
-        tasks took a few milliseconds on the development machine; the
-        latency is measured against ``resolve_budget``, not bounded by it).
-    tick : float, optional
-        Sampling period (seconds) to model every controller tick (S2.3);
-        ``None``: event level (idle ticks skipped; the pipeline offset is then
-        computed for a 1 ms period).
-    monitor : bool or {"live", "post"}
-        Run the independent safety monitor (raises
-        :class:`~workcell.sim.monitor.SafetyViolation`): ``True`` or
-        ``"live"`` checks during the run and stops it at the first
-        violating sample (:class:`~workcell.sim.monitor.LiveMonitor`);
-        ``"post"`` checks the finished run from the arms' records
-        (:class:`~workcell.sim.monitor.SafetyMonitor`); ``False``: off.
-    monitor_period : float
-        Seconds between the monitor's collision samples.
-    control_time : float
-        Per-arm control time per sampling period (S2.2 bound, checked when
-        ``tick`` is given).
-    insertion : {"planned", "drawn"}
-        ``"planned"``: every insertion takes the tries the compile planned
-        (the force-guided search is not simulated). ``"drawn"``: each insert
-        step's hole position error is drawn (seeded per task) and the
-        search simulated (S1.7, :mod:`workcell.sim.force`): thresholds
-        raised and restored, tries until one lands, the time they take; a
-        hole never found fails the task ("insertion failed after N tries").
-    insertion_sigma : float
-        Standard deviation of a hole's lateral position error, metres per
-        axis (``insertion="drawn"``).
-    insertion_tolerance : float, optional
-        A try lands when within this many metres of the hole on both axes;
-        default half the search step.
-    force_threshold : float or dict of str -> float
-        The wrist force sensors' free-motion threshold, newtons (one value,
-        or per arm name); a crash above the threshold in force stops the
-        arm (reflex arc, S1.2).
+    coordination : {"centralized"}
+        The coordination policy (:data:`~workcell.sim.options.COORDINATION_POLICIES`):
+        ``"centralized"`` is the S2.7 coordinator.
+    options : SimOptions, optional
+        Re-solving, sampling period, monitor, insertion and force settings,
+        ablations (:class:`~workcell.sim.options.SimOptions`); default
+        ``SimOptions()``.
 
     Returns
     -------
@@ -371,15 +307,26 @@ def simulate(
     ------
     UsageError
         Bad arguments (named), or too many arms for centralized control at
-        ``tick`` (S2.2).
+        ``options.tick`` (S2.2).
     ValidationError
         Bad fault records (index and field named).
     ScheduleError
         A schedule that violates the problem.
     SafetyViolation
         The monitor saw a collision or a broken zone invariant.
+    InternalError
+        With ``options.strict``: the run stalled (a bug of the simulator).
     """
     wall0 = time.perf_counter()
+    if options is None:
+        options = SimOptions()
+    elif not isinstance(options, SimOptions):
+        raise UsageError(f"simulate: options must be a SimOptions, got {type(options).__name__}")
+    if coordination not in COORDINATION_POLICIES:
+        raise UsageError(
+            f"simulate: unknown coordination policy {coordination!r} (known: "
+            f"{', '.join(COORDINATION_POLICIES)})"
+        )
     cc = _compiled(cell)
     p = cc.problem
     if not isinstance(schedule, Schedule):
@@ -388,52 +335,32 @@ def simulate(
         )
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise UsageError(f"simulate: seed must be an integer >= 0, got {seed!r}")
-    if not isinstance(resolve, bool):
-        raise UsageError(f"simulate: resolve must be True or False, got {resolve!r}")
-    if not (isinstance(monitor, bool) or monitor in ("live", "post")):
-        raise UsageError(
-            f"simulate: monitor must be True, False, 'live' or 'post', got {monitor!r}"
-        )
-    for name, value in (("resolve_budget", resolve_budget), ("monitor_period", monitor_period)):
-        if (
-            isinstance(value, bool)
-            or not isinstance(value, int | float)
-            or not (value > 0 and math.isfinite(value))
-        ):
-            raise UsageError(f"simulate: {name} must be a number > 0 (seconds), got {value!r}")
+    resolve = options.resolve
+    monitor = options.monitor
+    monitor_period = options.monitor_period
+    tick = options.tick
+    strict = options.strict
+    resolve_evaluations = options.resolve_evaluations
     if resolve_evaluations is None:
         resolve_evaluations = max(5, 2000 // max(1, p.n_tasks))
-    if (
-        isinstance(resolve_evaluations, bool)
-        or not isinstance(resolve_evaluations, int)
-        or (resolve_evaluations < 1)
-    ):
-        raise UsageError(
-            f"simulate: resolve_evaluations must be an integer >= 1, got {resolve_evaluations!r}"
-        )
     if tick is not None:
-        if (
-            isinstance(tick, bool)
-            or not isinstance(tick, int | float)
-            or not (tick > 0 and math.isfinite(tick))
-        ):
-            raise UsageError(f"simulate: tick must be None or a period > 0 seconds, got {tick!r}")
-        check_control_bound(p.n_arms, float(tick), control_time)
+        check_control_bound(p.n_arms, float(tick), options.control_time)
     if len(schedule.mode) != p.n_tasks:
         raise UsageError(
             f"simulate: the schedule covers {len(schedule.mode)} tasks, cell {p.name!r} has "
             f"{p.n_tasks}"
         )
-    if _zone_checks:
+    if options.zone_protocol:
         validate(p, schedule)
     fplan = as_plan(faults)
     _check_faults(fplan, cc)
     seed = int(seed)
-    check_insertion(insertion, insertion_sigma, insertion_tolerance)
-    thresholds = free_thresholds(force_threshold, p.arm_names)
+    thresholds = free_thresholds(options.force_threshold, p.arm_names)
     searches = (
-        insert_searches(cc, seed, sigma=insertion_sigma, tolerance=insertion_tolerance)
-        if insertion == "drawn"
+        insert_searches(
+            cc, seed, sigma=options.insertion_sigma, tolerance=options.insertion_tolerance
+        )
+        if options.insertion == "drawn"
         else {}
     )
 
@@ -472,10 +399,10 @@ def simulate(
         trace,
         arms,
         seed=seed,
-        resolve_budget=resolve_budget,
+        resolve_budget=options.resolve_budget,
         resolve_evaluations=resolve_evaluations,
-        zone_checks=_zone_checks,
-        geometry=_geometry,
+        zone_checks=options.zone_protocol,
+        geometry=options.geometry_guard,
         resolving=resolve,
     )
     arm_index = {n: i for i, n in enumerate(p.arm_names)}
@@ -502,9 +429,12 @@ def simulate(
                 for t, task in enumerate(cc.cell.taskset.tasks)
                 if f.part in cc.cell.taskset.gating_parts(task.id)
             ]
-            kernel.schedule(
-                expected, coord.part_late, tasks, expected + f.delay, f.part, absolute=True
-            )
+            if expected <= kernel.now:  # known before the first trajectories go out
+                coord.part_late(tasks, expected + f.delay, f.part)
+            else:
+                kernel.schedule(
+                    expected, coord.part_late, tasks, expected + f.delay, f.part, absolute=True
+                )
     live: LiveMonitor | None = None
     if monitor is True or monitor == "live":
         live = LiveMonitor(cc, kernel, arms, trace, monitor_period)
@@ -536,8 +466,9 @@ def simulate(
         monitor_period,
         wall0,
         t_end,
+        strict,
+        live,
     )
-    result.monitor = live
     return result
 
 
@@ -587,6 +518,8 @@ def _result(
     monitor_period: float,
     wall0: float,
     t_end: float,
+    strict: bool = False,
+    live: LiveMonitor | None = None,
 ) -> SimResult:
     p = cc.problem
     T = p.n_tasks
@@ -614,12 +547,13 @@ def _result(
                 end=float(log[1]),
                 status="done",
                 cause="",
+                cause_kind="",
             )
         else:
             m = int(plan.mode[t])
             a = int(p.mode_arm[m])
             row.update(arm=p.arm_names[a], mode=m, start=math.nan, end=math.nan, status="failed")
-            row["cause"] = _cause(coord, t)
+            row["cause_kind"], row["cause"] = _cause(coord, t, strict)
             trace.add(
                 kernel.now,
                 "task_failed",
@@ -690,6 +624,7 @@ def _result(
         message_delay=np.array(net.delays, dtype=float),
         messages=net.sent,
         retransmissions=net.retransmissions,
+        stale_frames=net.stale,
         failed_tasks=sum(1 for r in tasks if r["status"] == "failed"),
         done_tasks=sum(1 for r in tasks if r["status"] == "done"),
         ticks=ticker.ticks if ticker is not None else 0,
@@ -698,9 +633,19 @@ def _result(
     if monitor:
         SafetyMonitor(cc, monitor_period).check(arms, max(t_end, 0.0), trace)
     metrics.wall_seconds = time.perf_counter() - wall0
-    out = SimResult(p, schedule, plan, executed, seed, trace, metrics, tasks, res)
-    out._arms = arms
-    return out
+    return SimResult(
+        p,
+        schedule,
+        Plan(p, plan),
+        executed,
+        seed,
+        trace,
+        metrics,
+        live,
+        tuple(tasks),
+        tuple(res),
+        tuple(arms),
+    )
 
 
 def _merge(dicts: list[dict[str, float]]) -> dict[str, float]:
@@ -711,10 +656,28 @@ def _merge(dicts: list[dict[str, float]]) -> dict[str, float]:
     return dict(sorted(out.items()))
 
 
-def _cause(coord: Coordinator, t: int) -> str:
+def _cycle(graph: dict[int, list[int]]) -> list[int]:
+    """A cycle of the wait-for ``graph`` (arm -> arms it waits for), [] if none."""
+    for root in sorted(graph):
+        path: list[int] = []
+        on: dict[int, int] = {}
+        x: int | None = root
+        while x is not None and x not in on:
+            on[x] = len(path)
+            path.append(x)
+            nxt = graph.get(x, [])
+            x = min(nxt) if nxt else None
+        if x is not None:
+            return [*path[on[x] :], x]
+    return []
+
+
+def _cause(coord: Coordinator, t: int, strict: bool = False) -> tuple[str, str]:
+    """(category, text) of the failed task ``t`` (categories:
+    :data:`~workcell.sim.coordinator.CAUSE_KINDS`)."""
     p = coord.p
     if coord.cause[t]:
-        return coord.cause[t]
+        return coord.cause_kind[t] or "predecessor", coord.cause[t]
     # the predecessors not done (a done task's predecessors are all done)
     seen: set[int] = set()
     stack = [t]
@@ -725,37 +688,60 @@ def _cause(coord: Coordinator, t: int) -> str:
                 continue
             seen.add(q)
             if coord.cause[q]:
-                return f"predecessor {p.task_names[q]!r} failed: {coord.cause[q]}"
+                return "predecessor", f"predecessor {p.task_names[q]!r} failed: {coord.cause[q]}"
             stack.append(q)
 
     def no_arm(x: int) -> bool:
         return all(int(p.mode_arm[m]) in coord.failed_arms for m in p.task_modes[x])
 
     if no_arm(t):
-        return "no working arm can do it (every capable arm failed)"
+        return "arm_failed", "no working arm can do it (every capable arm failed)"
     for q in sorted(seen):
         if no_arm(q):
-            return f"predecessor {p.task_names[q]!r} cannot run: every arm able to do it failed"
+            return (
+                "predecessor",
+                f"predecessor {p.task_names[q]!r} cannot run: every arm able to do it failed",
+            )
     for q in sorted(seen):
         b = int(p.mode_arm[int(coord.plan.mode[q])])
         if b in coord.failed_arms:
             return (
+                "predecessor",
                 f"predecessor {p.task_names[q]!r} cannot run: its arm {p.arm_names[b]!r} failed"
-                + ("" if coord.resolving else " (re-solving off)")
+                + ("" if coord.resolving else " (re-solving off)"),
             )
     a = int(p.mode_arm[int(coord.plan.mode[t])])
     if a in coord.failed_arms:
         if not coord.resolving:
-            return f"arm {p.arm_names[a]!r} failed (re-solving off: its tasks are not reassigned)"
-        return f"arm {p.arm_names[a]!r} failed and no working arm could take the task"
+            return (
+                "arm_out",
+                f"arm {p.arm_names[a]!r} failed (re-solving off: its tasks are not reassigned)",
+            )
+        return "arm_failed", f"arm {p.arm_names[a]!r} failed and no working arm could take the task"
     if float(coord.plan.start[t]) >= FAR:
-        return "planned after a task that cannot run"
+        return "predecessor", "planned after a task that cannot run"
     held = {
-        c.name: [p.arm_names[b] for b in coord.geo_held.get(c.index, [])]
-        for c in coord.arms
-        if "geometry" in c.stops
+        c.index: list(coord.geo_held.get(c.index, [])) for c in coord.arms if "geometry" in c.stops
     }
-    if held:
-        who = "; ".join(f"{x!r} stopped by {', '.join(map(repr, ys))}" for x, ys in held.items())
-        return f"not completed: unresolved geometric deadlock (S2.6): {who}"
-    return "not completed when the simulation ended"
+    if a in held or _cycle(held):
+        cycle = _cycle(held)
+        names = p.arm_names
+        if cycle:
+            waits = " -> ".join(repr(names[x]) for x in cycle)
+        else:
+            waits = "; ".join(
+                f"{names[x]!r} waits for {', '.join(repr(names[y]) for y in ys)}"
+                for x, ys in sorted(held.items())
+            )
+        return "deadlock", f"unresolved geometric deadlock (S2.6), wait-for: {waits}"
+    # nothing explains it: an arm had work, no stop in force and no event
+    # pending -- a stall of the simulator itself
+    ctl = coord.arms[a]
+    doing = f"task {p.task_names[ctl.leg.task]!r}" if ctl.leg is not None else "no trajectory"
+    text = (
+        f"stall: arm {p.arm_names[a]!r} stood still with work left ({doing}, task "
+        f"{p.task_names[t]!r} {coord.status[t]}), no stop in force and no event pending"
+    )
+    if strict:
+        raise InternalError(f"simulate: {text} (please report)")
+    return "stall", text

@@ -56,10 +56,13 @@ KINDS: tuple[str, ...] = (
     "zone_leave",
     "monitor",
     "force",
+    "drop",
 )
 """Every kind of trace record (``"force"``: the wrist force sensor's
 thresholds set and forces read during an insertion search, S1.7, with
-``simulate(..., insertion="drawn")``; :mod:`workcell.sim.force`)."""
+``SimOptions(insertion="drawn")``; :mod:`workcell.sim.force`;
+``"drop"``: a frame dropped at its receiver, a duplicate or older than the
+withdrawal of its task, by the links' sequence numbers)."""
 
 COLUMNS: tuple[str, ...] = (
     "time",
@@ -246,6 +249,9 @@ class Metrics:
     messages : int
         Frames sent on the medium (retransmissions included).
     retransmissions : int
+    stale_frames : int
+        Frames dropped at their receiver by the links' sequence numbers: a
+        duplicate, or a frame older than the withdrawal of its task.
     failed_tasks : int
     done_tasks : int
     ticks : int
@@ -270,6 +276,7 @@ class Metrics:
     message_delay: FloatArray = field(default_factory=lambda: np.zeros(0))
     messages: int = 0
     retransmissions: int = 0
+    stale_frames: int = 0
     failed_tasks: int = 0
     done_tasks: int = 0
     ticks: int = 0
@@ -304,6 +311,7 @@ class Metrics:
             "resolves_over_budget": int(np.sum(self.resolve_latency > self.resolve_budget)),
             "messages": self.messages,
             "retransmissions": self.retransmissions,
+            "stale_frames": self.stale_frames,
             "message_delay_mean": float(np.mean(self.message_delay))
             if len(self.message_delay)
             else math.nan,

@@ -16,7 +16,7 @@ from multiarm.errors import UsageError, ValidationError
 from scheduler import solve
 from tasklib.steps import ForceSearch
 from workcell import CompileOptions, compile_cell, load_example
-from workcell.sim import Crash, EmergencyStop, FaultPlan, simulate
+from workcell.sim import Crash, EmergencyStop, FaultPlan, SimOptions, simulate
 from workcell.sim.force import (
     CRASH_FORCE,
     FREE_THRESHOLD,
@@ -44,7 +44,7 @@ def plan(cell: Any) -> Any:
 @pytest.fixture(scope="module")
 def drawn(cell: Any, plan: Any) -> Any:
     """Seed 1: the hole is found at the fourth try (three more than planned)."""
-    return simulate(cell, plan, seed=1, insertion="drawn")
+    return simulate(cell, plan, seed=1, options=SimOptions(insertion="drawn"))
 
 
 def _search(cell: Any, plan: Any, seed: int, **kw: Any) -> Any:
@@ -120,13 +120,13 @@ def test_crash_records_carry_a_force() -> None:
 
 def test_simulate_checks_the_new_arguments(cell: Any, plan: Any) -> None:
     with pytest.raises(UsageError, match="insertion must be one of 'planned', 'drawn'"):
-        simulate(cell, plan, insertion="sampled")
+        simulate(cell, plan, options=SimOptions(insertion="sampled"))
     with pytest.raises(UsageError, match="insertion_sigma must be a number >= 0"):
-        simulate(cell, plan, insertion="drawn", insertion_sigma=-1.0)
+        simulate(cell, plan, options=SimOptions(insertion="drawn", insertion_sigma=-1.0))
     with pytest.raises(UsageError, match="insertion_tolerance must be None or a number > 0"):
-        simulate(cell, plan, insertion_tolerance=0.0)
+        simulate(cell, plan, options=SimOptions(insertion_tolerance=0.0))
     with pytest.raises(UsageError, match="unknown arm 'middle'"):
-        simulate(cell, plan, force_threshold={"middle": 3.0})
+        simulate(cell, plan, options=SimOptions(force_threshold={"middle": 3.0}))
 
 
 # ------------------------------------------------------------ draws
@@ -148,7 +148,9 @@ def test_drawn_tries_are_deterministic_and_differ_across_seeds(cell: Any, plan: 
 def test_draws_do_not_depend_on_the_order_of_events(cell: Any, plan: Any, drawn: Any) -> None:
     """An emergency stop before the insertion shifts every later event; the
     tries drawn for the task are the same."""
-    r = simulate(cell, plan, seed=1, insertion="drawn", faults=[EmergencyStop(5.0, 2.0)])
+    r = simulate(
+        cell, plan, seed=1, faults=[EmergencyStop(5.0, 2.0)], options=SimOptions(insertion="drawn")
+    )
     reads = [e.detail for e in _force(r) if e.detail.startswith("read")]
     assert reads == [e.detail for e in _force(drawn) if e.detail.startswith("read")]
     assert len(reads) == _search(cell, plan, 1).tries == 4
@@ -171,7 +173,9 @@ def test_thresholds_raised_and_restored_around_insertions(cell: Any, plan: Any, 
     assert ev[-1].time == pytest.approx(ev[0].time + 4 * 0.4, abs=1e-9)
     assert {e.task for e in drawn.trace if e.kind == "force"} == {TASK}  # no other task pushes
     # the free threshold can be set per arm
-    r = simulate(cell, plan, seed=1, insertion="drawn", force_threshold={"left": 8.0})
+    r = simulate(
+        cell, plan, seed=1, options=SimOptions(insertion="drawn", force_threshold={"left": 8.0})
+    )
     assert _force(r)[-1].detail.startswith("set thresholds 8 N")
 
 
@@ -180,7 +184,7 @@ def test_planned_insertion_is_the_default_and_runs_as_planned(cell: Any, plan: A
     the run is the plan; drawn with a hole exactly where planned also is."""
     r = simulate(cell, plan, seed=1)
     assert not [e for e in r.trace if e.kind == "force"]
-    exact = simulate(cell, plan, seed=1, insertion="drawn", insertion_sigma=0.0)
+    exact = simulate(cell, plan, seed=1, options=SimOptions(insertion="drawn", insertion_sigma=0.0))
     assert len(_force(exact)) == 3  # raise, one try in the hole, restore
     for res in (r, exact):
         assert res.executed is not None
@@ -192,7 +196,13 @@ def test_planned_insertion_is_the_default_and_runs_as_planned(cell: Any, plan: A
 
 
 def _crash_run(cell: Any, plan: Any, at: float, force: float) -> Any:
-    return simulate(cell, plan, seed=1, insertion="drawn", faults=[Crash("left", at, 0.5, force)])
+    return simulate(
+        cell,
+        plan,
+        seed=1,
+        faults=[Crash("left", at, 0.5, force)],
+        options=SimOptions(insertion="drawn"),
+    )
 
 
 def test_a_crash_below_the_raised_threshold_does_not_stop(cell: Any, plan: Any, drawn: Any) -> None:
@@ -232,9 +242,8 @@ def test_a_crash_during_a_free_move_reflex_stops(cell: Any, plan: Any, drawn: An
         cell,
         plan,
         seed=1,
-        insertion="drawn",
         faults=[Crash("left", 12.0, 0.5, 3.0)],
-        force_threshold=2.0,
+        options=SimOptions(insertion="drawn", force_threshold=2.0),
     )
     assert 12.0 in _stops(low)
 
@@ -253,13 +262,13 @@ def test_executed_duration_is_the_plan_plus_the_extra_tries(
     assert s.extra == pytest.approx(1.2)
     assert set(drawn.tasks_frame()["status"]) == {"done"}
     # the same decisions when every controller tick is modelled (S2.3)
-    ticked = simulate(cell, plan, seed=1, insertion="drawn", tick=1e-3)
+    ticked = simulate(cell, plan, seed=1, options=SimOptions(insertion="drawn", tick=1e-3))
     assert _row(ticked)["end"] == pytest.approx(row["end"], abs=1e-9)
 
 
 def test_a_hole_never_found_fails_the_task_and_loses_nothing(cell: Any, plan: Any) -> None:
     p = cell.problem
-    r = simulate(cell, plan, seed=0, insertion="drawn", insertion_sigma=0.01)
+    r = simulate(cell, plan, seed=0, options=SimOptions(insertion="drawn", insertion_sigma=0.01))
     tf = r.tasks_frame()
     assert len(tf) == p.n_tasks and set(tf["status"]) == {"done", "failed"}
     cause = "insertion failed after 13 tries (step 6)"
@@ -283,7 +292,7 @@ def test_fewer_tries_than_planned_skip_the_rest_of_the_dwell() -> None:
     assert plan is not None
     s = _search(worst, plan, 0)
     assert (s.planned, s.tries, s.found) == (13, 1, True)
-    r = simulate(worst, plan, seed=0, insertion="drawn")
+    r = simulate(worst, plan, seed=0, options=SimOptions(insertion="drawn"))
     ev = _force(r)
     assert len(ev) == 3 and ev[2].time == pytest.approx(ev[0].time + 0.4, abs=1e-9)
     after = [e for e in r.trace if e.kind == "segment" and e.task == TASK and e.time >= ev[2].time]

@@ -18,7 +18,7 @@ from numba import njit
 
 from multiarm.errors import UsageError
 from scheduler import Schedule, solve
-from workcell import compile_cell, load_example, simulate
+from workcell import SimOptions, compile_cell, load_example, simulate
 from workcell.geometry import CollisionWorld
 from workcell.sim import EmergencyStop
 from workcell.sim.monitor import SafetyMonitor, SafetyViolation, _segment_dist2
@@ -39,7 +39,7 @@ def _greedy(cc: Any) -> Schedule:
 
 def _violation(cc: Any, plan: Schedule, monitor: str, **kw: Any) -> SafetyViolation:
     with pytest.raises(SafetyViolation) as info:
-        simulate(cc, plan, seed=0, monitor=monitor, **kw)
+        simulate(cc, plan, seed=0, options=SimOptions(monitor=monitor, **kw))
     return info.value
 
 
@@ -49,8 +49,8 @@ def test_a_colliding_run_stops_at_the_first_sample_the_post_run_check_reports(na
     greedy plans collide (tests/workcell/test_space_grid.py)."""
     cc = compile_cell(dataclasses.replace(load_example(name), grid=0.0))
     plan = _greedy(cc)
-    live = _violation(cc, plan, "live", _geometry=False)
-    post = _violation(cc, plan, "post", _geometry=False)
+    live = _violation(cc, plan, "live", geometry_guard=False)
+    post = _violation(cc, plan, "post", geometry_guard=False)
     assert "collide" in str(live) and str(live) == str(post)
     assert live.time == post.time and live.arms == post.arms
     # a sample of the monitor's grid, found there and then
@@ -66,7 +66,7 @@ def test_a_colliding_run_stops_at_the_first_sample_the_post_run_check_reports(na
     assert post.found > live.time and len(post.trace) > len(live.trace)
     assert max(e.time for e in post.trace if e.kind != "monitor") > live.time
     # FCL at every sample, without the pre-tests: the same first contact
-    run = simulate(cc, plan, seed=0, monitor=False, _geometry=False)
+    run = simulate(cc, plan, seed=0, options=SimOptions(monitor=False, geometry_guard=False))
     assert _first_contact_by_fcl_alone(cc, run, live.time + PERIOD / 2) == live.time
 
 
@@ -108,7 +108,7 @@ def test_a_broken_zone_invariant_stops_the_run_live(supersigma: Any) -> None:
     modes[queen] = int(p.mode_of[right, queen])
     starts[queen] = starts[king] + 5.0
     bad = Schedule.from_starts(p, modes, starts)
-    kw = {"_zone_checks": False, "_geometry": False}
+    kw = {"zone_protocol": False, "geometry_guard": False}
     live = _violation(supersigma, bad, "live", **kw)
     post = _violation(supersigma, bad, "post", **kw)
     msg = "arms 'left' and 'right' both moving in shared zone 'fixture'"
@@ -126,7 +126,7 @@ def test_nominal_runs_pass_and_the_monitor_does_not_change_them(name: str) -> No
     cc = compile_cell(load_example(name))
     plan = _greedy(cc)
     on = simulate(cc, plan, seed=0)  # live monitor, the default
-    off = simulate(cc, plan, seed=0, monitor=False)
+    off = simulate(cc, plan, seed=0, options=SimOptions(monitor=False))
     assert on.monitor is not None and off.monitor is None
     assert on.monitor.samples > 0
     assert not [e for e in on.trace if e.kind == "monitor"]
@@ -197,10 +197,10 @@ def test_the_capsule_pre_test_never_overestimates_a_distance() -> None:
 
 def test_monitor_values(supersigma: Any) -> None:
     plan = _greedy(supersigma)
-    post = simulate(supersigma, plan, seed=0, monitor="post")
+    post = simulate(supersigma, plan, seed=0, options=SimOptions(monitor="post"))
     assert post.monitor is None and set(post.tasks_frame()["status"]) == {"done"}
     with pytest.raises(UsageError, match="monitor must be True, False, 'live' or 'post'"):
-        simulate(supersigma, plan, monitor="sometimes")
+        simulate(supersigma, plan, options=SimOptions(monitor="sometimes"))
 
 
 @pytest.mark.parametrize(("name", "separate"), [("supersigma", True), ("scara4", False)])
@@ -224,7 +224,12 @@ def test_live_and_post_run_agree_on_randomly_broken_plans(name: str, separate: b
         found: dict[str, Any] = {}
         for how in ("live", "post"):
             try:
-                simulate(cc, plan, seed=0, monitor=how, _zone_checks=False, _geometry=False)
+                simulate(
+                    cc,
+                    plan,
+                    seed=0,
+                    options=SimOptions(monitor=how, zone_protocol=False, geometry_guard=False),
+                )
                 found[how] = None
             except SafetyViolation as exc:
                 found[how] = (

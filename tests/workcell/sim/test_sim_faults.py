@@ -20,6 +20,7 @@ from workcell.sim import (
     LatePart,
     LostSync,
     MessageLoss,
+    SimOptions,
     simulate,
 )
 
@@ -108,7 +109,7 @@ def test_without_re_solving_the_plan_is_kept(cell: Any, plan: Any) -> None:
     only pushes back the tasks it gates."""
     p = cell.problem
     arm, _task, at = _mid_tool_task(cell, plan)
-    kept = simulate(cell, plan, faults=[ArmFailure(arm, at)], resolve=False)
+    kept = simulate(cell, plan, faults=[ArmFailure(arm, at)], options=SimOptions(resolve=False))
     _nothing_lost(kept, p.n_tasks)
     assert kept.metrics.resolves == 0 and len(kept.metrics.resolve_latency) == 0
     assert [e.detail for e in kept.trace if e.kind == "resolve"] == [
@@ -126,11 +127,11 @@ def test_without_re_solving_the_plan_is_kept(cell: Any, plan: Any) -> None:
     redone = simulate(cell, plan, faults=[ArmFailure(arm, at)])
     assert redone.metrics.resolves == 1
     assert redone.metrics.failed_tasks < kept.metrics.failed_tasks
-    late = simulate(cell, plan, faults=[LatePart("pin", 30.0)], resolve=False)
+    late = simulate(cell, plan, faults=[LatePart("pin", 30.0)], options=SimOptions(resolve=False))
     assert late.metrics.resolves == 0 and late.metrics.done_tasks == p.n_tasks
     assert late.tasks_frame().set_index("task").loc["insert_pin", "start"] >= 2.0 + 30.0
     with pytest.raises(UsageError, match="resolve must be True or False"):
-        simulate(cell, plan, resolve="no")  # type: ignore[arg-type]
+        simulate(cell, plan, options=SimOptions(resolve="no"))  # type: ignore[arg-type]
 
 
 def _lost_wrongly(r: Any, p: Any, failed_arm: int) -> list[str]:
@@ -206,7 +207,12 @@ def test_a_re_solve_never_drops_a_task_a_working_arm_can_do(
         return dataclasses.replace(res, schedule=bad)
 
     monkeypatch.setattr(coordinator, "reschedule", spoil)
-    r = simulate(cell, plan, faults=[ArmFailure("left", 0.2 * plan.makespan)], monitor=False)
+    r = simulate(
+        cell,
+        plan,
+        faults=[ArmFailure("left", 0.2 * plan.makespan)],
+        options=SimOptions(monitor=False),
+    )
     assert len(calls) == 2 and calls[1][1] == 1  # the warm start decoded
     state = calls[0][0]
     far = sorted(v for v in state.releases.values() if v >= coordinator.FAR)
@@ -267,8 +273,8 @@ def test_a_part_that_never_comes_fails_its_tasks_with_the_cause(cell: Any, plan:
 
 
 def test_emergency_stop_holds_every_arm(cell: Any, plan: Any) -> None:
-    base = simulate(cell, plan, monitor=False)
-    r = simulate(cell, plan, faults=[EmergencyStop(5.0, 3.0)], monitor=False)
+    base = simulate(cell, plan, options=SimOptions(monitor=False))
+    r = simulate(cell, plan, faults=[EmergencyStop(5.0, 3.0)], options=SimOptions(monitor=False))
     alarms = [e for e in r.trace if e.kind == "message" and e.message == "alarm"]
     assert {e.dst for e in alarms} == {1, 2}
     assert r.metrics.executed_makespan >= base.metrics.executed_makespan
@@ -317,7 +323,7 @@ def test_random_fault_plans_are_safe_and_lose_nothing(seed: int, n: int) -> None
     r = simulate(cc, sched, faults=faults, seed=seed)  # monitor on: raises if unsafe
     _nothing_lost(r, cc.problem.n_tasks)
     if seed % 2 == 0:
-        again = simulate(cc, sched, faults=faults, seed=seed, monitor=False)
+        again = simulate(cc, sched, faults=faults, seed=seed, options=SimOptions(monitor=False))
         assert again.trace.to_json() == r.trace.to_json()
 
 

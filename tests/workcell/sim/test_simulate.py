@@ -7,7 +7,9 @@ tests/workcell/sim/test_simulate.py -k golden`` (then review the diff).
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -16,7 +18,7 @@ import numpy as np
 import pytest
 
 from multiarm.errors import UsageError, ValidationError
-from scheduler import Schedule, solve, validate
+from scheduler import Plan, Schedule, solve, validate
 from workcell import compile_cell, load_example
 from workcell.sim import (
     MESSAGE_BYTES,
@@ -27,6 +29,7 @@ from workcell.sim import (
     LostSync,
     MessageLoss,
     SafetyViolation,
+    SimOptions,
     SimResult,
     simulate,
 )
@@ -77,7 +80,7 @@ def test_the_executed_makespan_is_the_planned_one(
     cc = _cc(cell, supersigma, scara4)
     assert {"greedy", "tree"} <= set(plans[cell])
     for solver, plan in plans[cell].items():
-        r = simulate(cc, plan, monitor=False)
+        r = simulate(cc, plan, options=SimOptions(monitor=False))
         assert r.metrics.failed_tasks == 0, solver
         assert abs(r.metrics.executed_makespan - plan.makespan) < 1e-6, solver
         assert not [e for e in r.trace if e.kind in ("sleep", "detour") and "geometr" in e.detail]
@@ -86,7 +89,7 @@ def test_the_executed_makespan_is_the_planned_one(
         np.testing.assert_allclose(r.executed.end, plan.end, atol=1e-6)
         assert abs(validate(cc.problem, r.executed) - plan.makespan) < 1e-6
         # and the same without the geometric check
-        off = simulate(cc, plan, monitor=False, _geometry=False)
+        off = simulate(cc, plan, options=SimOptions(monitor=False, geometry_guard=False))
         np.testing.assert_allclose(off.executed.start, plan.start, atol=1e-6)  # type: ignore[union-attr]
 
 
@@ -117,13 +120,15 @@ def test_cell8_runs_as_planned_with_the_geometric_check_on() -> None:
     cc = compile_cell(load_example("cell8"))
     p = cc.problem
     plan = solve(p, "greedy", seed=0).schedule
-    r = simulate(cc, plan, monitor=False)
+    r = simulate(cc, plan, options=SimOptions(monitor=False))
     assert r.metrics.failed_tasks == 0
     assert abs(r.metrics.executed_makespan - plan.makespan) < 1e-6
     assert r.executed is not None
     np.testing.assert_allclose(r.executed.start, plan.start, atol=1e-6)
     a = p.arm_names.index("s4")
-    f = simulate(cc, plan, faults=[ArmFailure("s4", 0.6 * plan.makespan)], monitor=False)
+    f = simulate(
+        cc, plan, faults=[ArmFailure("s4", 0.6 * plan.makespan)], options=SimOptions(monitor=False)
+    )
     status = dict(zip(f.tasks_frame()["task"], f.tasks_frame()["status"], strict=True))
     dead: dict[int, bool] = {}
     for t in p.topological_order:
@@ -136,8 +141,10 @@ def test_cell8_runs_as_planned_with_the_geometric_check_on() -> None:
 
 def test_tick_mode_models_every_tick_with_the_same_decisions(supersigma: Any, plans: Any) -> None:
     plan = plans["supersigma"]["greedy"]
-    ev = simulate(supersigma, plan, monitor=False, _geometry=False)
-    tk = simulate(supersigma, plan, tick=1e-3, monitor=False, _geometry=False)
+    ev = simulate(supersigma, plan, options=SimOptions(monitor=False, geometry_guard=False))
+    tk = simulate(
+        supersigma, plan, options=SimOptions(tick=1e-3, monitor=False, geometry_guard=False)
+    )
     assert tk.metrics.executed_makespan == ev.metrics.executed_makespan
     assert tk.metrics.ticks >= int(0.9 * ev.metrics.executed_makespan / 1e-3)
     assert ev.metrics.ticks == 0
@@ -146,9 +153,9 @@ def test_tick_mode_models_every_tick_with_the_same_decisions(supersigma: Any, pl
 def test_the_same_seed_gives_the_same_trace(supersigma: Any, plans: Any) -> None:
     plan = plans["supersigma"]["greedy"]
     faults = [MessageLoss(0.2), Crash("left", 20.0, 0.5)]
-    a = simulate(supersigma, plan, seed=5, faults=faults, monitor=False)
-    b = simulate(supersigma, plan, seed=5, faults=faults, monitor=False)
-    c = simulate(supersigma, plan, seed=6, faults=faults, monitor=False)
+    a = simulate(supersigma, plan, seed=5, faults=faults, options=SimOptions(monitor=False))
+    b = simulate(supersigma, plan, seed=5, faults=faults, options=SimOptions(monitor=False))
+    c = simulate(supersigma, plan, seed=6, faults=faults, options=SimOptions(monitor=False))
     assert a.trace.to_json() == b.trace.to_json()
     assert a.trace.to_json() != c.trace.to_json()
     assert a.metrics.retransmissions > 0
@@ -193,7 +200,7 @@ def test_oscillating_geometric_stops_cannot_spin_without_time_advancing(
 
     monkeypatch.setattr(GeometryGuard, "blockers", blockers)
     monkeypatch.setattr(Coordinator, "_detour", lambda self, ctl: False)
-    r = simulate(scara4, plans["scara4"]["greedy"], monitor=False)
+    r = simulate(scara4, plans["scara4"]["greedy"], options=SimOptions(monitor=False))
     assert calls[0] < 20_000
     assert r.metrics.done_tasks == 0
     causes = set(r.tasks_frame()["cause"])
@@ -224,7 +231,9 @@ def test_utilisation_is_busy_time_over_the_executed_makespan(
     monkeypatch.setattr(GeometryGuard, "blockers", blockers)
     monkeypatch.setattr(Coordinator, "_detour", lambda self, ctl: False)
     late = 0.9 * plan.makespan
-    r = simulate(supersigma, plan, faults=[EmergencyStop(late, 1.0)], monitor=False)
+    r = simulate(
+        supersigma, plan, faults=[EmergencyStop(late, 1.0)], options=SimOptions(monitor=False)
+    )
     m = r.metrics
     assert 0 < m.done_tasks < p.n_tasks and m.executed_makespan < 0.5 * late
     assert set(m.utilisation) == set(p.arm_names)
@@ -320,7 +329,7 @@ def test_the_monitor_fires_on_a_run_that_breaks_the_zone_invariants(supersigma: 
         SafetyViolation,
         match=r"'left' and 'right' both moving in shared zone 'fixture' from t = 53\.8162 s",
     ):
-        simulate(supersigma, bad, _zone_checks=False, _geometry=False)
+        simulate(supersigma, bad, options=SimOptions(zone_protocol=False, geometry_guard=False))
     # the same run with the coordinator's zone checks: safe
     r = simulate(supersigma, good)
     assert r.metrics.done_tasks == p.n_tasks
@@ -329,14 +338,64 @@ def test_the_monitor_fires_on_a_run_that_breaks_the_zone_invariants(supersigma: 
 # ------------------------------------------------------------ errors
 
 
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("resolve", "yes"),
+        ("resolve_budget", 0.0),
+        ("resolve_evaluations", 0),
+        ("tick", -1e-3),
+        ("monitor", "sometimes"),
+        ("monitor_period", math.inf),
+        ("control_time", 0),
+        ("insertion", "sampled"),
+        ("insertion_sigma", -1.0),
+        ("insertion_tolerance", 0.0),
+        ("force_threshold", "strong"),
+        ("zone_protocol", 1),
+        ("geometry_guard", None),
+        ("strict", "no"),
+    ],
+)
+def test_sim_options_are_checked_and_name_the_field(field: str, value: Any) -> None:
+    with pytest.raises(UsageError, match=rf"SimOptions\.{field} must"):
+        SimOptions(**{field: value})
+
+
+def test_sim_options_and_the_result_are_frozen_records(supersigma: Any, plans: Any) -> None:
+    opts = SimOptions(resolve=False, force_threshold={"left": 8.0})
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        opts.resolve = True  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        opts.force_threshold["left"] = 1.0  # type: ignore[index]
+    plan = plans["supersigma"]["greedy"]
+    r = simulate(supersigma, plan, options=SimOptions(monitor=False))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.seed = 3  # type: ignore[misc]
+    assert isinstance(r.plan, Plan) and r.plan.problem is supersigma.problem
+    assert r.plan.makespan == pytest.approx(plan.makespan)
+
+
+def test_only_the_centralized_policy_exists(supersigma: Any, plans: Any) -> None:
+    plan = plans["supersigma"]["greedy"]
+    with pytest.raises(
+        UsageError, match=r"unknown coordination policy 'distributed' \(known: centralized\)"
+    ):
+        simulate(supersigma, plan, coordination="distributed")
+    with pytest.raises(UsageError, match="options must be a SimOptions"):
+        simulate(supersigma, plan, options={"resolve": False})  # type: ignore[arg-type]
+    with pytest.raises(TypeError):
+        simulate(supersigma, plan, 0)  # type: ignore[misc]
+
+
 def test_bad_arguments_give_our_errors(supersigma: Any, plans: Any) -> None:
     plan = plans["supersigma"]["greedy"]
     with pytest.raises(UsageError, match="seed"):
         simulate(supersigma, plan, seed=-1)
     with pytest.raises(UsageError, match="tick"):
-        simulate(supersigma, plan, tick=0.0)
+        simulate(supersigma, plan, options=SimOptions(tick=0.0))
     with pytest.raises(UsageError, match="resolve_budget"):
-        simulate(supersigma, plan, resolve_budget=0)
+        simulate(supersigma, plan, options=SimOptions(resolve_budget=0))
     with pytest.raises(UsageError, match="schedule"):
         simulate(supersigma, "plan")  # type: ignore[arg-type]
     with pytest.raises(UsageError, match="cell"):
@@ -363,7 +422,7 @@ def test_the_centralized_control_bound_is_checked(scara4: Any, plans: Any) -> No
     with pytest.raises(UsageError, match=r"9 arms exceed .* = 8 arms"):
         check_control_bound(9, 1e-3)
     with pytest.raises(UsageError, match=r"4 arms exceed .* 0\.0003 s / 0\.000125 s = 2 arms"):
-        simulate(scara4, plans["scara4"]["greedy"], tick=3e-4)
+        simulate(scara4, plans["scara4"]["greedy"], options=SimOptions(tick=3e-4))
 
 
 def test_pipeline_offset_comes_from_top_speed_and_steepest_stop() -> None:
@@ -383,7 +442,7 @@ def test_pipeline_offset_comes_from_top_speed_and_steepest_stop() -> None:
 
 
 def test_result_tables_and_files(supersigma: Any, plans: Any, tmp_path: Path) -> None:
-    r = simulate(supersigma, plans["supersigma"]["greedy"], monitor=False)
+    r = simulate(supersigma, plans["supersigma"]["greedy"], options=SimOptions(monitor=False))
     assert isinstance(r, SimResult)
     assert list(r.trace.to_dataframe().columns) == list(COLUMNS)
     tf = r.tasks_frame()
@@ -397,8 +456,9 @@ def test_result_tables_and_files(supersigma: Any, plans: Any, tmp_path: Path) ->
         "end",
         "status",
         "cause",
+        "cause_kind",
     ]
-    assert (tf["status"] == "done").all()
+    assert (tf["status"] == "done").all() and (tf["cause_kind"] == "").all()
     rf = r.reservations_frame()
     assert set(rf["kind"]) <= {"zone", "move", "tool"} and len(rf) > 0
     assert (rf["end"] >= rf["start"]).all()
@@ -468,7 +528,9 @@ def test_golden_trace(supersigma: Any) -> None:
 
 def test_a_medium_with_latency_delays_every_message(scara4: Any, plans: Any) -> None:
     plan = plans["scara4"]["greedy"]
-    r = simulate(scara4, plan, medium="fixed", monitor=False, _geometry=False)
+    r = simulate(
+        scara4, plan, medium="fixed", options=SimOptions(monitor=False, geometry_guard=False)
+    )
     delays = r.metrics.message_delay
     assert len(delays) == r.metrics.messages and np.allclose(delays, 1e-3)
     assert r.metrics.done_tasks == scara4.problem.n_tasks
