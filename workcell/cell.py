@@ -355,8 +355,8 @@ def cell_from_dict(
     padding = comp.get("padding", 0.005)
     if isinstance(padding, bool) or not isinstance(padding, int | float):
         raise _fail(f"{top}: compile.padding", f"expected a number, got {padding!r}")
-    if not (math.isfinite(padding) and 0 < padding <= 0.1):
-        raise _fail(f"{top}: compile.padding", f"must be in (0, 0.1] metres, got {padding!r}")
+    if not (math.isfinite(padding) and 1e-4 <= padding <= 0.1):
+        raise _fail(f"{top}: compile.padding", f"must be in [0.0001, 0.1] metres, got {padding!r}")
     park = comp.get("park", "home")
     if park not in ("home", "last"):
         raise _fail(f"{top}: compile.park", f"expected 'home' or 'last', got {park!r}")

@@ -299,7 +299,6 @@ def _check_scheduling(path: Path, kind: str, problem_name: str | None) -> str:
     """Check a problem JSON, a schedule or an FJSP file (recognised by content)."""
     from multiarm.errors import UsageError
     from scheduler import load_problem, load_schedule, lower_bound, read_fjsp, validate
-    from workcell.cli import _load_schedulable
 
     if kind == "fjsp":
         p = read_fjsp(path)
@@ -314,7 +313,7 @@ def _check_scheduling(path: Path, kind: str, problem_name: str | None) -> str:
         raise UsageError(
             f"{path}: a schedule is checked against its problem: add --problem PROBLEM"
         )
-    problem = _load_schedulable(problem_name)
+    problem = load_schedulable(problem_name)
     s = load_schedule(path, problem)
     return f"schedule of {s.n_tasks} tasks, valid, makespan {validate(problem, s):.6g}"
 
@@ -452,3 +451,22 @@ def check_files(
         if not r.ok:
             print(f"error: {r.error}", file=sys.stderr)
     return 0 if ok else 1
+
+
+def load_schedulable(name: str) -> Any:
+    """A problem from a problem JSON, an FJSP file, a cell file or a built-in cell's name."""
+    from scheduler import detect_format, load_problem, read_fjsp
+    from workcell.cell import EXAMPLES, load_example
+
+    path = Path(name)
+    if not path.exists() and name in EXAMPLES:
+        from workcell import compile_cell
+
+        return compile_cell(load_example(name)).problem
+    if path.suffix.lower() == ".fjs" or (path.is_file() and detect_format(path) == "fjsp"):
+        return read_fjsp(path)
+    if path.suffix.lower() == ".toml":
+        from workcell import compile_cell, load_cell
+
+        return compile_cell(load_cell(path)).problem
+    return load_problem(path)

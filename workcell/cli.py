@@ -276,25 +276,6 @@ def cmd_check(args: argparse.Namespace) -> int:
     return check_files(args.files, args.problem, as_json=args.json)
 
 
-def _load_schedulable(name: str) -> Any:
-    """A problem from a problem JSON, an FJSP file, a cell file or a built-in cell's name."""
-    from scheduler import detect_format, load_problem, read_fjsp
-    from workcell.cell import EXAMPLES, load_example
-
-    path = Path(name)
-    if not path.exists() and name in EXAMPLES:
-        from workcell import compile_cell
-
-        return compile_cell(load_example(name)).problem
-    if path.suffix.lower() == ".fjs" or (path.is_file() and detect_format(path) == "fjsp"):
-        return read_fjsp(path)
-    if path.suffix.lower() == ".toml":
-        from workcell import compile_cell, load_cell
-
-        return compile_cell(load_cell(path)).problem
-    return load_problem(path)
-
-
 def cmd_schedule(args: argparse.Namespace) -> int:
     """Solve a problem file or a cell and print (and optionally write) the schedule."""
     import json
@@ -318,7 +299,9 @@ def cmd_schedule(args: argparse.Namespace) -> int:
         )
     if args.rows < 0:
         raise UsageError(f"--rows must be >= 0, got {args.rows}")
-    problem = _load_schedulable(args.problem)
+    from workcell.check import load_schedulable
+
+    problem = load_schedulable(args.problem)
     print(f"{problem!r}; lower bound {lower_bound(problem):.6g}")
 
     def improved(pr: Progress) -> None:

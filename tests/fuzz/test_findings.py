@@ -20,6 +20,7 @@ from multiarm.errors import (
 from scheduler.io import load_problem, load_schedule
 from tasklib import load_taskset
 from tests.fuzz.targets import HERE, schedule_problem
+from workcell import load_cell
 from workcell.experiments.sweep import load_sweep
 from zones import load_sdl
 
@@ -55,7 +56,27 @@ CASES = [
     ("sweep/solver-unhashable.toml", load_sweep, ValidationError, "solvers[0].solver: expected"),
     ("sdl/recursion-deep-union.sdl", load_sdl, SDLSyntaxError, "nested too deeply"),
     ("sdl/wall-normal-overflow.sdl", load_sdl, SDLError, "too long to normalise"),
+    ("cell/int-too-many-digits.toml", load_cell, FormatError, "too many digits"),
+    ("cell/recursion-deep-array.toml", load_cell, FormatError, "nested too deeply"),
 ]
+
+PADDING = {
+    "compile/oom-padding-denormal.bin": 1.7e-313,
+    "compile/padding-small-names-arm.bin": 7.6e-6,
+}
+"""The compile harness's findings: paddings the cell file accepted (one ran out
+of memory, one failed in the sweep naming neither file nor field)."""
+
+
+@pytest.mark.parametrize(("name", "padding"), sorted(PADDING.items()))
+def test_a_sub_physical_padding_is_refused_by_name(name: str, padding: float) -> None:
+    import dataclasses
+
+    from workcell import load_example
+
+    with pytest.raises(ValidationError, match=r"padding must be in \[0\.0001, 0\.1\] metres"):
+        dataclasses.replace(load_example("supersigma"), padding=padding)
+    assert (CRASHES / name).is_file()
 
 
 @pytest.mark.parametrize(("name", "load", "error", "words"), CASES, ids=[c[0] for c in CASES])
@@ -77,7 +98,7 @@ def test_finding_is_refused_by_name(
 def test_every_fixed_reproducer_has_a_regression_case() -> None:
     from tests.fuzz.targets import KNOWN_FOREIGN
 
-    covered = {c[0] for c in CASES}
+    covered = {c[0] for c in CASES} | set(PADDING)
     for folder in CRASHES.iterdir():
         for f in folder.iterdir():
             key = f"{folder.name}/{f.name}"

@@ -18,13 +18,16 @@ def test_demo_compiles_and_schedules_every_builtin_cell(
 ) -> None:
     assert main(["demo", "--time-limit", "0.5", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
-    for name in ("supersigma", "scara4", "cell8"):
+    from workcell import EXAMPLES
+
+    n = len(EXAMPLES)
+    for name in EXAMPLES:
         assert f"== {name}:" in out
-    assert out.count("compiled in") == 3
-    assert out.count("per arm:") == 3 and out.count("per zone:") == 3
+    assert out.count("compiled in") == n
+    assert out.count("per arm:") == n and out.count("per zone:") == n
     for solver in ("greedy", "tree", "cpsat"):  # the scheduling step ran with every solver
-        assert out.count(f"\n{solver} ") == 3
-    for name in ("supersigma", "scara4", "cell8"):  # each plan ran, as planned and with a failure
+        assert out.count(f"\n{solver} ") == n
+    for name in EXAMPLES:  # each plan ran, as planned and with a failure
         for run in ("nominal", "arm_failure"):
             assert (tmp_path / name / run / "trace.json").is_file()
             assert (tmp_path / name / run / "gantt.png").is_file()

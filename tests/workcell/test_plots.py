@@ -500,7 +500,7 @@ def test_every_fault_record_of_a_run_is_classified(
 def test_space_grid_blocks_and_the_wait_summary(
     faulty: tuple[CompiledCell, Schedule, Any],
 ) -> None:
-    from workcell.compile import SPACE_GRID
+    from workcell.compiled import SPACE_GRID
     from workcell.geometry.reach import block_name
     from workcell.viz import space_grid_table, wait_summary
     from workcell.viz.waits import block_bounds

@@ -267,7 +267,7 @@ def test_cell_file_fields_and_errors(tmp_path: Path) -> None:
         ({"tool_link": "hand"}, r"arms\.u\.tool_link: .*no link 'hand'"),
         ({"joint_limits": [[-1.0, 1.0]] * 5}, r"arms\.u\.joint_limits: .*6 \(low < high\)"),
         ({"joint_limits": [[-7.0, 1.0]] * 6}, r"arms\.u\.joint_limits: .*beyond the URDF"),
-        ({"velocity_scale": 1.5}, r"arms\.u\.velocity_scale: must be in \(0, 1\]"),
+        ({"velocity_scale": 1.5}, r"arms\.u\.velocity_scale: 1\.5 is out of range"),
         ({"max_acceleration": [1.0]}, r"arms\.u\.max_acceleration: .*6 positive"),
         ({"radius": 0.1}, r"arms\.u: unknown field 'radius'"),
     ]
