@@ -199,7 +199,10 @@ def test_same_seed_same_schedule_different_seed_other_search() -> None:
             on_improve=partial(_note, seen),
         )
         assert seen and seen[-1] == best.makespan and seen == sorted(seen, reverse=True)
-        runs.append((best.makespan, ev.schedule(best).start.tolist(), seen))
+        # the improvement log is reported once per chunk of iterations, and chunks
+        # grow with the wall clock (cheap iterations): its granularity is not part
+        # of the seed's promise, the search and its result are
+        runs.append((best.makespan, ev.schedule(best).start.tolist()))
     assert runs[0] == runs[1]
     assert runs[0][1] != runs[2][1]
 
