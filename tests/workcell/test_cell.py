@@ -97,7 +97,7 @@ def test_a_cell_file_loads_with_builtin_references(tmp_path: Path) -> None:
         (
             GOOD + "[compile]\npadding = -1\n",
             ValidationError,
-            r"compile\.padding: must be in \(0, 0\.1\]",
+            r"compile\.padding: must be in \[0\.0001, 0\.1\]",
         ),
         (
             GOOD + '[compile]\npark = "away"\n',
