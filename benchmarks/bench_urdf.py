@@ -102,8 +102,8 @@ def kinematics_rows(seed: int, batch: int, poses: int) -> list[dict[str, Any]]:
 def capsule_rows(seed: int, samples: int) -> list[dict[str, Any]]:
     import trimesh
 
+    from workcell.arms.capsules import FittedCapsule, capsule_contains, capsule_volume
     from workcell.arms.urdf import PANDA, UR5, UrdfArm
-    from workcell.geometry.capsules import FittedCapsule, capsule_contains, capsule_volume
 
     rows = []
     for robot, arm in (

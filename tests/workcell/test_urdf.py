@@ -12,14 +12,14 @@ import pytest
 
 from multiarm.errors import MultiarmError, Unreachable, ValidationError
 from workcell.arms import arm_from_dict
-from workcell.arms.urdf import PANDA, UR5, UrdfArm, resolve_urdf
-from workcell.geometry import CollisionWorld
-from workcell.geometry.capsules import (
+from workcell.arms.capsules import (
     FittedCapsule,
     capsule_contains,
     capsule_volume,
     fit_capsule,
 )
+from workcell.arms.urdf import PANDA, UR5, UrdfArm, resolve_urdf
+from workcell.geometry import CollisionWorld
 
 yourdfpy = pytest.importorskip("yourdfpy")
 trimesh = pytest.importorskip("trimesh")

@@ -11,7 +11,7 @@ and MuJoCo) is read with `yourdfpy <https://github.com/clemense/yourdfpy>`_
 * the **collision geometry** of every link attached to the chain (the links
   on it, and the links hanging from them, such as a gripper's fingers). Each
   collision element (mesh, box, cylinder or sphere) becomes a capsule that
-  contains it (:func:`workcell.geometry.capsules.fit_capsule`), the arm's
+  contains it (:func:`workcell.arms.capsules.fit_capsule`), the arm's
   :attr:`~UrdfArm.shapes` for the compiled sweep and state checks; the
   triangle meshes themselves are kept in :attr:`UrdfArm.meshes` for an
   independent check with FCL (:meth:`workcell.geometry.CollisionWorld.add_arm_meshes`).
@@ -63,6 +63,7 @@ from multiarm.types import FloatArray, IntArray, JointVector, Transform
 from workcell.arms._common import DriveArm
 from workcell.arms._urdf_jit import chain_frames, chain_ik
 from workcell.arms.base import JointKind, LinkShape
+from workcell.arms.capsules import fit_capsule
 from workcell.arms.profiles import ServoDrive
 
 __all__ = [
@@ -486,8 +487,6 @@ def load_urdf(ref: str, tool_link: str, base_dir: Path | None = None) -> UrdfMod
 
 
 def _shape_from(name: str, frame: int, hull: FloatArray) -> LinkShape:
-    from workcell.geometry.capsules import fit_capsule
-
     cap = fit_capsule(hull)
     if cap.length < 1e-9:
         off = np.eye(4)
