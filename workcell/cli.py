@@ -407,9 +407,8 @@ def _load_cell_arg(name: str) -> Any:
 def _load_faults(name: str) -> Any:
     """A fault plan from a ``.toml`` (``[[faults]]`` tables) or ``.json`` file
     (a list of records, or ``{"faults": [...]}``), via ``FaultPlan.from_dicts``."""
-    import json
-    import tomllib
-
+    from multiarm.errors import FormatError
+    from multiarm.text import parse_json, parse_toml
     from workcell.sim.faults import FaultPlan
 
     path = Path(name)
@@ -419,20 +418,13 @@ def _load_faults(name: str) -> Any:
         why = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
         raise UsageError(f"--faults: cannot read {name!r}: {why}") from None
     suffix = path.suffix.lower()
-    data: Any
+    if suffix not in (".toml", ".json"):
+        raise UsageError(f"--faults: {name}: expected a .toml or .json file")
+    parse = parse_toml if suffix == ".toml" else parse_json
     try:
-        if suffix == ".toml":
-            data = tomllib.loads(text)
-        elif suffix == ".json":
-            data = json.loads(text)
-        else:
-            raise UsageError(f"--faults: {name}: expected a .toml or .json file")
-    except tomllib.TOMLDecodeError as exc:
-        raise UsageError(f"--faults: {name}: TOML syntax error: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise UsageError(
-            f"--faults: {name}:{exc.lineno}:{exc.colno}: JSON syntax error: {exc.msg}"
-        ) from None
+        data: Any = parse(text, name, FormatError, "faults file")
+    except FormatError as exc:
+        raise UsageError(f"--faults: {exc}") from None
     if isinstance(data, dict):
         if set(data) != {"faults"} or not isinstance(data["faults"], list):
             raise UsageError(f"--faults: {name}: expected a list of fault records under 'faults'")

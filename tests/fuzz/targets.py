@@ -340,21 +340,7 @@ TARGETS: dict[str, Target | _Harness] = {
 }
 TARGETS["compile"] = _Harness("compile", _compile_target)
 
-KNOWN_FOREIGN: dict[str, tuple[str, ...]] = {
-    # the --faults reader (workcell/cli.py _load_faults): the same two, for TOML
-    # and JSON; and a "kind" that is a list or table: TypeError (unhashable) in
-    # workcell/sim/faults.py FaultPlan.from_dicts ("kind not in _KINDS")
-    "faults_json": (
-        "int-too-many-digits.json",
-        "kind-unhashable.json",
-        "recursion-deep-array.json",
-    ),
-    "faults_toml": (
-        "int-too-many-digits.toml",
-        "kind-unhashable.toml",
-        "recursion-deep-array.toml",
-    ),
-}
+KNOWN_FOREIGN: dict[str, tuple[str, ...]] = {}
 """Reproducers (file names under ``crashes/<target>/``) of findings outside the
 fuzzed parsers, not fixed yet: the test does not run them (some exhaust the
 memory) and the fuzz harnesses leave such inputs out (:data:`PENDING_RANGES`).

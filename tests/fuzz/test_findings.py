@@ -15,6 +15,7 @@ from multiarm.errors import (
     SDLError,
     SDLSyntaxError,
     SourceError,
+    UsageError,
     ValidationError,
 )
 from scheduler.io import load_problem, load_schedule
@@ -25,6 +26,14 @@ from workcell.experiments.sweep import load_sweep
 from zones import load_sdl
 
 CRASHES = HERE / "crashes"
+
+
+def _faults(path: Path) -> object:
+    """The ``--faults`` file reader of the command line."""
+    from workcell.cli import _load_faults
+
+    return _load_faults(str(path))
+
 
 CASES = [
     ("taskset_json/recursion-deep-array.json", load_taskset, FormatError, "nested too deeply"),
@@ -58,6 +67,12 @@ CASES = [
     ("sdl/wall-normal-overflow.sdl", load_sdl, SDLError, "too long to normalise"),
     ("cell/int-too-many-digits.toml", load_cell, FormatError, "too many digits"),
     ("cell/recursion-deep-array.toml", load_cell, FormatError, "nested too deeply"),
+    ("faults_json/int-too-many-digits.json", _faults, UsageError, "too many digits"),
+    ("faults_json/recursion-deep-array.json", _faults, UsageError, "nested too deeply"),
+    ("faults_json/kind-unhashable.json", _faults, UsageError, ".kind: unknown fault kind"),
+    ("faults_toml/int-too-many-digits.toml", _faults, UsageError, "too many digits"),
+    ("faults_toml/recursion-deep-array.toml", _faults, UsageError, "nested too deeply"),
+    ("faults_toml/kind-unhashable.toml", _faults, UsageError, ".kind: unknown fault kind"),
 ]
 
 PADDING = {
@@ -89,7 +104,8 @@ def test_finding_is_refused_by_name(
         load(path)  # type: ignore[operator]
     if isinstance(info.value, SourceError):
         assert info.value.filename == str(path)
-    assert str(info.value).startswith(f"{path}")
+    # the command line's --faults reader names its option first
+    assert str(info.value).removeprefix("--faults: ").startswith(f"{path}")
     if name.endswith("wall-normal-overflow.sdl"):
         assert (info.value.line, info.value.column) == (2, 1)
     assert words in str(info.value)

@@ -138,7 +138,7 @@ def test_bad_arguments_are_one_line_errors_before_any_work(
     bad = tmp_path / "bad.toml"
     bad.write_text("[[faults]]\nkind = \n")
     err = _bad(["simulate", "supersigma", "--faults", str(bad)], capsys)
-    assert f"--faults: {bad}: TOML syntax error" in err
+    assert f"--faults: {bad}:2:" in err and "TOML syntax error" in err  # file:line:col
     bad.write_text('[[faults]]\nkind = "crash"\narm = "left"\n')
     err = _bad(["simulate", "supersigma", "--faults", str(bad)], capsys)
     assert f"--faults: {bad}: faults[0] (crash): missing field 'at'" in err
@@ -148,7 +148,7 @@ def test_bad_arguments_are_one_line_errors_before_any_work(
     assert "faults[0].kind: unknown fault kind 'meteor'" in err
     bad_json.write_text("{")
     err = _bad(["simulate", "supersigma", "--faults", str(bad_json)], capsys)
-    assert f"--faults: {bad_json}:1:2: JSON syntax error" in err
+    assert f"--faults: {bad_json}:1:2: " in err
     bad_json.write_text('{"faults": 3}')
     err = _bad(["simulate", "supersigma", "--faults", str(bad_json)], capsys)
     assert "expected a list of fault records under 'faults'" in err

@@ -287,7 +287,7 @@ class FaultPlan(Sequence[Fault]):
             if not isinstance(rec, Mapping):
                 raise ValidationError(f"faults[{i}]: expected a table, got {rec!r}")
             kind = rec.get("kind")
-            if kind not in _KINDS:
+            if not isinstance(kind, str) or kind not in _KINDS:
                 raise ValidationError(
                     f"faults[{i}].kind: unknown fault kind {kind!r} (known: {', '.join(sorted(_KINDS))})"
                 )
