@@ -23,8 +23,6 @@ import numpy as np
 import pytest
 
 from multiarm.errors import InternalError
-from scheduler import solve
-from workcell import compile_cell, load_example
 from workcell.sim import (
     ActivateZones,
     ArmFailure,
@@ -40,26 +38,6 @@ from workcell.sim import (
 from workcell.sim.coordinator import CAUSE_KINDS
 
 UNEXPLAINED = "not completed when the simulation ended"
-
-
-@pytest.fixture(scope="module")
-def cell() -> Any:
-    return compile_cell(load_example("supersigma"))
-
-
-@pytest.fixture(scope="module")
-def plan(cell: Any) -> Any:
-    return solve(cell.problem, "greedy", seed=0).schedule
-
-
-@pytest.fixture(scope="module")
-def scara4() -> Any:
-    return compile_cell(load_example("scara4"))
-
-
-@pytest.fixture(scope="module")
-def scara4_plan(scara4: Any) -> Any:
-    return solve(scara4.problem, "greedy", seed=0).schedule
 
 
 @pytest.fixture(scope="module")

@@ -25,26 +25,6 @@ from workcell.sim import (
 )
 
 
-@pytest.fixture(scope="module")
-def cell() -> Any:
-    return compile_cell(load_example("supersigma"))
-
-
-@pytest.fixture(scope="module")
-def plan(cell: Any) -> Any:
-    return solve(cell.problem, "greedy", seed=0).schedule
-
-
-@pytest.fixture(scope="module")
-def scara4() -> Any:
-    return compile_cell(load_example("scara4"))
-
-
-@pytest.fixture(scope="module")
-def scara4_plan(scara4: Any) -> Any:
-    return solve(scara4.problem, "greedy", seed=0).schedule
-
-
 def _nothing_lost(r: Any, n: int) -> None:
     tf = r.tasks_frame()
     assert len(tf) == n
