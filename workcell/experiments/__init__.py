@@ -21,7 +21,8 @@ The command ``multiarm sweep FILE [--dask-address ADDRESS] [--workers N]`` runs 
 """
 
 from workcell.experiments.executors import check_dask_address
-from workcell.experiments.results import COLUMNS, read_results, write_results
+from workcell.experiments.results import read_results, write_results
+from workcell.experiments.rows import COLUMNS
 from workcell.experiments.sweep import (
     BENCHMARK,
     InstanceSpec,
