@@ -140,8 +140,6 @@ _GENERATOR_KEYS = {
     "grid": int,
 }
 _SOLVER_KEYS = {"label", "solver", "time_limit", "seeds", "options"}
-_CPSAT_RUNNER_KEYS = {"max_deterministic_time"}
-"""CP-SAT options the runner passes to ``scheduler.cpsat.solve_cpsat`` itself."""
 _FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
 
 
@@ -514,27 +512,19 @@ def _solvers(w: _Where, item: Mapping[str, Any], where: str) -> list[SolverConfi
     opts = dict(_table(w, item.get("options", {}), f"{where}.options"))
     cls = REGISTRY[solver].options
     names = {f.name for f in fields(cls)}
-    runner = {
-        k: opts.pop(k)
-        for k in list(opts)
-        if solver == "cpsat" and k in _CPSAT_RUNNER_KEYS and k not in names
-    }
     for k in opts:
         if k not in names:
-            extra = sorted(names | (_CPSAT_RUNNER_KEYS if solver == "cpsat" else set()))
             raise w.fail(
                 f"{where}.options.{k}",
-                f"solver {solver!r} has no option {k!r} (it takes: {', '.join(extra)})",
+                f"solver {solver!r} has no option {k!r} (it takes: {', '.join(sorted(names))})",
             )
     try:
         cls(**opts)
     except MultiarmError as exc:
         raise w.fail(f"{where}.options", str(exc)) from None
-    if "max_deterministic_time" in runner:
-        runner["max_deterministic_time"] = _number(
-            w, runner["max_deterministic_time"], f"{where}.options.max_deterministic_time"
-        )
-    options = tuple(sorted({**opts, **runner}.items()))
+    if opts.get("max_deterministic_time") is not None:  # a float in the run's key, as before
+        opts["max_deterministic_time"] = float(opts["max_deterministic_time"])
+    options = tuple(sorted(opts.items()))
     raw_seeds = _list(w, item.get("seeds", [0]), f"{where}.seeds")
     seeds: list[int | str] = []
     for j, s in enumerate(raw_seeds):
@@ -555,7 +545,7 @@ def _solvers(w: _Where, item: Mapping[str, Any], where: str) -> list[SolverConfi
     if None in limits:
         work = {
             "tree": "max_evaluations" in opts,
-            "cpsat": "max_deterministic_time" in runner or "max_deterministic_time" in opts,
+            "cpsat": opts.get("max_deterministic_time") is not None,
             "greedy": True,
         }[solver]
         if not work:
