@@ -70,7 +70,9 @@ with ``workers = 1``) for ``cpsat``; ``greedy`` is one list pass.
 
 Every error names the file and the field (``fjsp.toml: solvers[1].options:
 TreeOptions.workers must be an int >= 1, got 0``); TOML syntax errors give
-``file:line:col``.
+``file:line:col``. Every FJSP file and cell file an instance names is read
+once when the sweep file is, so a broken one stops the sweep before any run,
+naming the sweep file, the field, the instance file and its own error.
 """
 
 from __future__ import annotations
@@ -88,8 +90,8 @@ from typing import Any
 
 from multiarm.errors import FormatError, MultiarmError, UsageError
 from multiarm.text import parse_toml, read_source
-from scheduler import REGISTRY, SOLVERS
-from workcell.cell import EXAMPLES
+from scheduler import REGISTRY, SOLVERS, read_fjsp
+from workcell.cell import EXAMPLES, load_cell
 from workcell.experiments._fields import (
     _int,
     _list,
@@ -141,6 +143,21 @@ _GENERATOR_KEYS = {
 }
 _SOLVER_KEYS = {"label", "solver", "time_limit", "seeds", "options"}
 _FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
+
+
+def _readable(w: _Where, field: str, path: Path, read: Any) -> None:
+    """Read an instance file once now, so that a broken one stops the sweep before any run.
+
+    The error names the sweep file, the field and the instance file's own
+    error (which carries the instance file and, for syntax, ``line:col``).
+    """
+    try:
+        read(path)
+    except MultiarmError as exc:
+        shown = str(exc)
+        if fspath(path) not in shown and path.name not in shown:
+            shown = f"{fspath(path)}: {shown}"
+        raise w.fail(field, f"instance file is broken: {shown}") from None
 
 
 # ------------------------------------------------------------------ parsing
@@ -350,6 +367,7 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
             if not matches:
                 raise w.fail(f"{where}.files[{j}]", f"{pat!r} matches no file (looked for {full})")
             for m in matches:
+                _readable(w, f"{where}.files[{j}]", Path(m), read_fjsp)
                 rel = m if Path(pat).is_absolute() else os.path.relpath(m, base)
                 out.append(
                     InstanceSpec(
@@ -420,6 +438,7 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
                     f"{where}.cells[{j}]",
                     f"{c!r} is neither a built-in cell ({', '.join(EXAMPLES)}) nor a file",
                 )
+            _readable(w, f"{where}.cells[{j}]", p, load_cell)
             out.append(
                 InstanceSpec(
                     "cell",
@@ -446,6 +465,8 @@ def _campaign(
                 f"{where}.cells[{j}]",
                 f"{c!r} is neither a built-in cell ({', '.join(EXAMPLES)}) nor a file",
             )
+        if c not in EXAMPLES:
+            _readable(w, f"{where}.cells[{j}]", p, load_cell)
         cells.append(c if c in EXAMPLES else fspath(p.resolve()))
     episodes = _int(w, item.get("episodes"), f"{where}.episodes", least=1)
     batch = _int(w, item.get("batch", CAMPAIGN_BATCH), f"{where}.batch", least=1)
