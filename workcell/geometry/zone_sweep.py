@@ -54,7 +54,7 @@ time: the grown shapes against the mesh surface, plus "shape centre inside
 the mesh" and "a mesh vertex inside the shape's capsule" for containment.
 
 The tests run over samples x shapes x zone solids in a compiled loop
-(:mod:`workcell.geometry._sweep_jit`, numba) that skips a zone once a sample
+(:mod:`workcell.geometry._zone_sweep_jit`, numba) that skips a zone once a sample
 touches it; the vectorised numpy versions are kept as the reference the tests
 compare it with.
 
@@ -87,7 +87,7 @@ import numpy as np
 from multiarm.errors import UsageError, ValidationError
 from multiarm.types import BoolArray, FloatArray, IntArray
 from workcell.arms.base import Arm, LinkShape, shape_frames
-from workcell.geometry._sweep_jit import capsules_touch, contacts_block, segment_points
+from workcell.geometry._zone_sweep_jit import capsules_touch, contacts_block, segment_points
 from workcell.geometry.world import CollisionWorld
 from zones.geometry import Primitive
 from zones.model import ZoneMap
@@ -487,7 +487,7 @@ def _contacts_block(
 ) -> BoolArray:
     """(N, Z) bool: capsules (p0, p1, rad) touch zone solids (conservative supersets).
 
-    The compiled loop of :mod:`workcell.geometry._sweep_jit`; it gives the
+    The compiled loop of :mod:`workcell.geometry._zone_sweep_jit`; it gives the
     same answers as :func:`_contacts_block_numpy`, the vectorised reference.
     """
     out: BoolArray = contacts_block(

@@ -1,4 +1,4 @@
-"""Compiled inner loops of the conservative sweep (:mod:`workcell.geometry.sweep`).
+"""Compiled inner loops of the conservative sweep (:mod:`workcell.geometry.zone_sweep`).
 
 The same tests as the vectorised numpy path, one sample at a time, so no
 (samples x shapes x primitives x faces) temporaries are built and a zone
