@@ -12,14 +12,12 @@ import json
 import math
 import os
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from multiarm.errors import UsageError
+from scheduler import Problem, Result
+from workcell.experiments.grid import Run
 from workcell.experiments.provenance import provenance
-
-if TYPE_CHECKING:
-    from scheduler import Problem, Result
-    from workcell.experiments.grid import Run
 
 __all__ = ["COLUMNS", "benchmark_row", "error_row", "result_row"]
 

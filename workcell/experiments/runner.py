@@ -5,16 +5,13 @@ from __future__ import annotations
 import math
 import time
 import traceback
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from scheduler import REGISTRY, lower_bound, solve, validate
+from scheduler import REGISTRY, Problem, Result, lower_bound, solve, validate
 from scheduler.kernel import warm_up
 from workcell.experiments.grid import Run, SolverConfig
 from workcell.experiments.instances import benchmark_function, build_problem
 from workcell.experiments.rows import benchmark_row, error_row, result_row
-
-if TYPE_CHECKING:
-    from scheduler import Problem, Result
 
 __all__ = ["run_one"]
 

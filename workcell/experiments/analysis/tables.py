@@ -10,6 +10,7 @@ sweep.
 
 from __future__ import annotations
 
+import datetime
 import json
 import math
 from collections.abc import Sequence
@@ -449,8 +450,6 @@ def sweep_note(df: Any, sweep_file: str | Sequence[str] = "", command: str = "")
         machine (CPUs, Python, platform), the package's git commit, when the
         runs started and the load average meanwhile.
     """
-    import datetime
-
     lines = []
     files = [sweep_file] if isinstance(sweep_file, str) else list(sweep_file)
     files = [f for f in files if f]
