@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from multiarm.errors import FormatError, UsageError, ValidationError
-from scheduler import solve, validate
+from scheduler import REGISTRY, solve, validate
 from scheduler.generate import random_problem
 from workcell.cli import main
 from workcell.experiments import (
@@ -186,9 +186,16 @@ def test_a_local_run_records_validated_makespans_and_provenance(tmp_path: Path) 
         assert row["n_tasks"] == 6 and row["status"] in ("feasible", "optimal")
         assert row["makespan"] == row["objective"]
         assert row["lower_bound"] <= row["makespan"]
-        if row["solver"] == "greedy":  # the same run by hand gives the same validated makespan
-            r = solve(p, "greedy", time_limit=None, seed=int(row["seed"]))
-            assert r.schedule is not None and validate(p, r.schedule) == row["makespan"]
+        # every run is the run scheduler.solve gives with the same typed options
+        # (CP-SAT's work limit included): same status, makespan, objective, bound
+        options = REGISTRY[str(row["solver"])].options(**json.loads(str(row["options"])))
+        r = solve(p, str(row["solver"]), time_limit=None, seed=int(row["seed"]), options=options)
+        assert r.schedule is not None and validate(p, r.schedule) == row["makespan"]
+        assert (r.status.value, r.objective, r.bound) == (
+            row["status"],
+            row["objective"],
+            row["bound"],
+        )
     row = df.iloc[0]
     from multiarm import __version__
 
