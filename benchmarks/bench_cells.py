@@ -117,7 +117,7 @@ def detours(seed: int, every: int = 1) -> dict[str, Any]:
 
 def validity_checks(seed: int, states: int) -> dict[str, Any]:
     """The compiled and the numpy single-state checks on the same ``states`` random states."""
-    from workcell.geometry._sweep_jit import capsules_touch
+    from workcell.geometry._zone_sweep_jit import capsules_touch
     from workcell.geometry.planner import DetourPlanner, ObstacleSet
 
     cell = load_example("scara4")

@@ -28,12 +28,12 @@ PROBE = """
 import json, sys, time
 import numpy as np
 from scheduler.generate import random_problem
-from scheduler.kernel import compiled, decode, jit_enabled, warm_up
+from scheduler.kernel import compile_problem, decode, jit_enabled, warm_up
 from scheduler.search import priority_order
 seconds = float(sys.argv[1]); size = json.loads(sys.argv[2]); seed = int(sys.argv[3])
 warm_up()  # compile or load
 p = random_problem(*size, seed=seed)
-inst = compiled(p)
+inst = compile_problem(p)
 order = priority_order(p); free = np.full(p.n_tasks, -1)
 decode(inst, order, free)
 n = 0; t0 = time.perf_counter()

@@ -35,7 +35,7 @@ import numpy as np
 
 from benchmarks.common import best_rate, table_main
 from scheduler.generate import random_problem
-from scheduler.kernel import compiled, decode, warm_up
+from scheduler.kernel import compile_problem, decode, warm_up
 from scheduler.problem import Problem
 from scheduler.search import priority_order
 
@@ -68,7 +68,7 @@ def measure(seed: int, size: list[int] | tuple[int, ...], repeat: int) -> dict[s
     plain = random_problem(size[0], size[1], size[2], size[3], seed=seed)
     order = priority_order(plain)
     free = np.full(plain.n_tasks, -1, dtype=np.int64)
-    inst0 = compiled(plain)
+    inst0 = compile_problem(plain)
 
     def run(fn: Any, n: int) -> Any:
         def go() -> int:
@@ -89,7 +89,7 @@ def measure(seed: int, size: list[int] | tuple[int, ...], repeat: int) -> dict[s
 
     def cold() -> None:
         q = _with_oracle(plain)
-        inst = compiled(q)
+        inst = compile_problem(q)
         t0 = time.perf_counter()
         code, _st = decode(inst, order, free)
         assert code == 0
@@ -103,7 +103,7 @@ def measure(seed: int, size: list[int] | tuple[int, ...], repeat: int) -> dict[s
     row["oracle_calls_cold"] = asked[-1]
     # warm: the same problem again and again
     q = _with_oracle(plain)
-    inst = compiled(q)
+    inst = compile_problem(q)
     code, _st = decode(inst, order, free)
     assert code == 0
     calls = q.blocking.calls  # type: ignore[union-attr]

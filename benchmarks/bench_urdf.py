@@ -139,8 +139,8 @@ def capsule_rows(seed: int, samples: int) -> list[dict[str, Any]]:
 def agreement(seed: int, parks: int, states: int) -> dict[str, Any]:
     from workcell.arms.urdf import UR5, UrdfArm
     from workcell.geometry import CollisionWorld
-    from workcell.geometry._sweep_jit import capsules_touch
-    from workcell.geometry.sweep import _segments, _shape_capsules
+    from workcell.geometry._zone_sweep_jit import capsules_touch
+    from workcell.geometry.zone_sweep import _segments, _shape_capsules
 
     a = UrdfArm("a", UR5, tool_link="tool0")
     base_b = np.diag([-1.0, -1.0, 1.0, 1.0])

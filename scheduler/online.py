@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from multiarm.errors import UsageError
-from scheduler.kernel import compiled
+from scheduler.kernel import compile_problem
 from scheduler.problem import Problem
 from scheduler.result import Result, SearchStats, SolveStatus
 from scheduler.schedule import Schedule, validate
@@ -134,7 +134,7 @@ def reschedule(
     """
     t0 = time.perf_counter()
     p = problem
-    inst = compiled(p)
+    inst = compile_problem(p)
     now = float(state.time)
     frozen: dict[int, tuple[int, float, float, np.ndarray]] = {}
     for ref, entry in state.done.items():

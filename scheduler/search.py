@@ -29,7 +29,7 @@ import numpy as np
 
 from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
-from scheduler.kernel import State, compiled, critical_chain, decode, to_schedule
+from scheduler.kernel import State, compile_problem, critical_chain, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
 from scheduler.kernel.resume import Snaps, chunk_size, copy_rows, decode_resume, new_snaps
 from scheduler.problem import Problem
@@ -127,7 +127,7 @@ class Evaluator:
         frozen: frozenset[int] = frozenset(),
     ) -> None:
         self.problem = problem
-        self.inst = compiled(problem)
+        self.inst = compile_problem(problem)
         self.waits = waits
         self.blocking = problem.blocking is not None
         self.chrono = self.blocking if chronological is None else (chronological or self.blocking)

@@ -45,7 +45,7 @@ import numpy as np
 
 from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
-from scheduler.kernel import State, compiled, seq_decode
+from scheduler.kernel import State, compile_problem, seq_decode
 from scheduler.kernel._tabu_jit import GraphArrays, SearchArrays, graph_makespan, tabu_run
 from scheduler.problem import Problem
 from scheduler.search import Budget, Evaluator, Solution
@@ -88,7 +88,7 @@ def critical_chain(
         return []
     start, end, mode = st.t_start, st.t_end, st.t_mode
     arm = p.mode_arm[mode]
-    inst = compiled(p)
+    inst = compile_problem(p)
     prev = np.full(T, -1, dtype=np.int64)
     for a in range(p.n_arms):
         n = int(st.arm_n[a])

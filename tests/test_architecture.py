@@ -25,7 +25,7 @@ def test_import_contracts_hold() -> None:
         check=False,
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert "4 kept, 0 broken" in proc.stdout
+    assert "5 kept, 0 broken" in proc.stdout
 
 
 def _lint_with_bad_module(
@@ -37,7 +37,11 @@ def _lint_with_bad_module(
     for pkg in PACKAGES:
         shutil.copytree(ROOT / pkg, tmp_path / pkg, ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
-    (tmp_path / where / "_bad.py").write_text(code)
+    folder = tmp_path / where
+    if not folder.is_dir():  # a package that does not exist yet (e.g. workcell/replay)
+        folder.mkdir(parents=True)
+        (folder / "__init__.py").write_text('"""A package to come."""\n')
+    (folder / "_bad.py").write_text(code)
     lint = Path(sys.executable).with_name("lint-imports")
     return subprocess.run(
         [str(lint), "--config", str(tmp_path / "pyproject.toml")],
@@ -63,6 +67,40 @@ def test_a_broken_layer_is_detected(tmp_path: Path) -> None:
     proc = _lint_with_bad_module(tmp_path, "zones", "import scheduler\n")
     assert proc.returncode != 0
     assert "zones._bad -> scheduler" in proc.stdout
+
+
+@pytest.mark.parametrize(
+    ("where", "code", "arrow"),
+    [
+        # nothing below the face imports it: the simulation importing the CLI
+        ("workcell/sim", "import workcell.cli\n", "workcell.sim._bad -> workcell.cli"),
+        # the geometry is below the plots
+        ("workcell/geometry", "import workcell.viz\n", "workcell.geometry._bad -> workcell.viz"),
+        # experiments are below the campaigns that use them
+        (
+            "workcell/experiments",
+            "import workcell.campaign\n",
+            "workcell.experiments._bad -> workcell.campaign",
+        ),
+        # the replay sits under the simulation (SimResult.to_html imports it)
+        ("workcell/replay", "import workcell.sim\n", "workcell.replay._bad -> workcell.sim"),
+    ],
+)
+def test_a_broken_workcell_layer_is_detected(
+    tmp_path: Path, where: str, code: str, arrow: str
+) -> None:
+    # the layers inside workcell (docs/design.md) can fail, each for its arrow
+    proc = _lint_with_bad_module(tmp_path, where, code)
+    assert proc.returncode != 0
+    assert "Inside workcell, layers go one way" in proc.stdout and "BROKEN" in proc.stdout
+    assert arrow in proc.stdout
+
+
+def test_a_workcell_module_in_no_layer_is_detected(tmp_path: Path) -> None:
+    # the workcell layers are exhaustive: a new top-level module must be given a layer
+    proc = _lint_with_bad_module(tmp_path, "workcell", "X = 1\n")
+    assert proc.returncode != 0
+    assert "workcell._bad" in proc.stdout
 
 
 @pytest.mark.parametrize("pkg", PACKAGES)

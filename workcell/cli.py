@@ -707,10 +707,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             "interrupted: finished runs are saved; run the same command to resume", file=sys.stderr
         )
         return 130
-    print(
-        f"{outcome.ran} runs in {outcome.wall_time:.1f} s ({outcome.runs_per_minute:.1f} runs/min), "
-        f"{outcome.skipped} already done, {outcome.failed} failed; results: {outcome.out}"
-    )
+    print(outcome.report())  # the result table, each failure named, the totals
     return 1 if outcome.failed else 0
 
 

@@ -2,10 +2,10 @@
 
 The kernel is a small package, one job per module:
 
-* :mod:`~scheduler.kernel.compile`: a :class:`~scheduler.problem.Problem`
+* :mod:`~scheduler.kernel.arrays`: a :class:`~scheduler.problem.Problem`
   compiled into flat arrays bundled in typed tuples (:class:`Arrays`,
   :class:`State`, ...) and wrapped in an :class:`Instance`, built once per
-  problem by :func:`compiled` and cached here;
+  problem by :func:`compile_problem` and cached here;
 * :mod:`~scheduler.kernel.place`: the earliest placement of one task on the
   arm gaps and the zone and tool timelines (waits at zone borders, start
   zones, the blocking oracle's detours);
@@ -35,7 +35,7 @@ Examples
 >>> import numpy as np
 >>> from scheduler.generate import random_problem
 >>> p = random_problem(3, 12, 2, 1, seed=0)
->>> inst = compiled(p)
+>>> inst = compile_problem(p)
 >>> code, st = decode(inst, np.arange(p.n_tasks), np.full(p.n_tasks, -1))
 >>> code, bool(np.all(st.t_mode >= 0))
 (0, True)
@@ -43,6 +43,7 @@ Examples
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 from scheduler.kernel import critical as _critical
@@ -58,8 +59,16 @@ from scheduler.kernel.api import (
     seq_decode,
     warm_up,
 )
+from scheduler.kernel.arrays import (
+    Arrays,
+    Ctx,
+    Instance,
+    OracleTable,
+    Scratch,
+    State,
+    compile_problem,
+)
 from scheduler.kernel.build import to_schedule
-from scheduler.kernel.compile import Arrays, Ctx, Instance, OracleTable, Scratch, State, compiled
 from scheduler.kernel.critical import critical_chain
 
 drop_stale_cache(
@@ -81,7 +90,7 @@ __all__ = [
     "OracleTable",
     "Scratch",
     "State",
-    "compiled",
+    "compile_problem",
     "critical_chain",
     "decode",
     "drop_stale_cache",
@@ -93,3 +102,15 @@ __all__ = [
     "to_schedule",
     "warm_up",
 ]
+
+
+def __getattr__(name: str) -> object:
+    """``compiled``: the former name of :func:`compile_problem` (deprecated, one release)."""
+    if name == "compiled":
+        warnings.warn(
+            "scheduler.kernel.compiled is deprecated: use scheduler.kernel.compile_problem",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return compile_problem
+    raise AttributeError(f"module 'scheduler.kernel' has no attribute {name!r}")

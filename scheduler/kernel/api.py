@@ -1,10 +1,10 @@
 """The kernel's Python entry points: decoding lists and sequences, batched
 queries, blocking placements, and the one-time compile (:func:`warm_up`).
 
-Each call bundles the per-call options in a :class:`~scheduler.kernel.compile.Ctx`
+Each call bundles the per-call options in a :class:`~scheduler.kernel.arrays.Ctx`
 and runs a compiled pass of :mod:`scheduler.kernel.passes`. With a blocking
 oracle the compiled pass reads the answered costs from the instance's
-:class:`~scheduler.kernel.compile.OracleTable`; when some are unknown it
+:class:`~scheduler.kernel.arrays.OracleTable`; when some are unknown it
 stops, the oracle is asked here (:meth:`Instance.answer_misses`) and the
 pass resumes where it stopped, so the oracle is asked once per
 (mode, arm, pose) for the problem's lifetime.
@@ -24,7 +24,7 @@ import numpy as np
 from multiarm.errors import UsageError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel._jit import jit_enabled
-from scheduler.kernel.compile import Instance, State, compiled
+from scheduler.kernel.arrays import Instance, State, compile_problem
 from scheduler.kernel.critical import _chain, critical_chain
 from scheduler.kernel.passes import (
     RESUME,
@@ -431,7 +431,7 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
     m.set_blocking(_Parked())
     parked = m.build()
     for p in (plain, parked):
-        inst = compiled(p)
+        inst = compile_problem(p)
         order = np.arange(p.n_tasks, dtype=np.int64)
         free = np.full(p.n_tasks, -1, dtype=np.int64)
         _code, st = decode(inst, order, free)

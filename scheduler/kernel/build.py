@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scheduler.kernel.compile import Instance, State
+from scheduler.kernel.arrays import Instance, State
 from scheduler.schedule import Schedule
 
 __all__ = ["to_schedule"]
@@ -30,10 +30,10 @@ def to_schedule(inst: Instance, st: State) -> Schedule:
     --------
     >>> import numpy as np
     >>> from scheduler.generate import random_problem
-    >>> from scheduler.kernel import compiled, decode
+    >>> from scheduler.kernel import compile_problem, decode
     >>> p = random_problem(2, 6, 1, 0, seed=0)
-    >>> code, st = decode(compiled(p), np.arange(6), np.full(6, -1))
-    >>> code, len(to_schedule(compiled(p), st).start)
+    >>> code, st = decode(compile_problem(p), np.arange(6), np.full(6, -1))
+    >>> code, len(to_schedule(compile_problem(p), st).start)
     (0, 6)
     """
     p = inst.problem

@@ -22,9 +22,9 @@ Examples
 --------
 >>> import numpy as np
 >>> from scheduler.generate import random_problem
->>> from scheduler.kernel import compiled, decode
+>>> from scheduler.kernel import compile_problem, decode
 >>> p = random_problem(3, 12, 2, 1, seed=0)
->>> inst = compiled(p)
+>>> inst = compile_problem(p)
 >>> _code, st = decode(inst, np.arange(p.n_tasks), np.full(p.n_tasks, -1))
 >>> chain = critical_chain(inst, st)
 >>> chain[0][0] == int(np.argmax(st.t_end)), chain[-1][1]
@@ -37,7 +37,7 @@ import numpy as np
 
 from multiarm.types import IntArray
 from scheduler.kernel._jit import njit
-from scheduler.kernel.compile import Instance, State
+from scheduler.kernel.arrays import Instance, State
 from scheduler.kernel.place import _setup
 
 __all__ = ["ARM", "PRED", "REASONS", "RELEASE", "RESOURCE", "critical_chain", "task_reasons"]

@@ -17,12 +17,12 @@ of already placed tasks, finds the earliest start ``S >= S0`` such that
 
 :func:`_commit` records a placement. With a blocking oracle,
 :func:`_place_blocking` adds the detour cost of the arms parked at the start
-(read from the :class:`~scheduler.kernel.compile.OracleTable`, unknown costs
+(read from the :class:`~scheduler.kernel.arrays.OracleTable`, unknown costs
 listed as misses for Python to answer).
 
 Intervals on a resource never overlap, so they are sorted by end too, and a
 binary search finds the first conflict. The placement functions take the
-bundled tuples of :mod:`scheduler.kernel.compile`: ``d`` (Arrays), ``st``
+bundled tuples of :mod:`scheduler.kernel.arrays`: ``d`` (Arrays), ``st``
 (State), ``sc`` (Scratch), ``ot`` (OracleTable), and bind the fields they use
 to locals on entry (reading tuple fields inside the hot loops measured 1.5-2x
 slower); the innermost helpers take arrays.

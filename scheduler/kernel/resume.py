@@ -4,7 +4,7 @@
 A local-search move changes a list from some position on; every task before
 it is placed exactly as before. :func:`decode_resume` decodes a list in
 *chunks* of ``every`` positions and saves the partial schedule (the whole
-:class:`~scheduler.kernel.compile.State`) at each chunk boundary into a
+:class:`~scheduler.kernel.arrays.State`) at each chunk boundary into a
 :class:`Snaps` buffer; a later list that agrees with it (same tasks, same
 modes) up to some position starts from the last boundary before it, so only
 the changed suffix is placed again.
@@ -21,9 +21,9 @@ Examples
 --------
 >>> import numpy as np
 >>> from scheduler.generate import random_problem
->>> from scheduler.kernel import compiled, decode
+>>> from scheduler.kernel import compile_problem, decode
 >>> p = random_problem(3, 20, 2, 1, seed=0)
->>> inst = compiled(p)
+>>> inst = compile_problem(p)
 >>> order = np.asarray(p.topological_order, dtype=np.int64)
 >>> free = np.full(p.n_tasks, -1, dtype=np.int64)
 >>> snaps = new_snaps(inst, len(order), every=5)
@@ -42,7 +42,7 @@ import numpy as np
 from multiarm.errors import UsageError
 from multiarm.types import BoolArray, FloatArray, IntArray
 from scheduler.kernel._jit import njit
-from scheduler.kernel.compile import Instance, State
+from scheduler.kernel.arrays import Instance, State
 from scheduler.kernel.passes import RESUME, _decode
 
 __all__ = ["Snaps", "chunk_size", "copy_rows", "decode_resume", "new_snaps"]
@@ -50,7 +50,7 @@ __all__ = ["Snaps", "chunk_size", "copy_rows", "decode_resume", "new_snaps"]
 
 class Snaps(NamedTuple):
     """Saved partial schedules: row ``k`` of each field is the
-    :class:`~scheduler.kernel.compile.State` field after the first ``k * every``
+    :class:`~scheduler.kernel.arrays.State` field after the first ``k * every``
     positions of a list; ``ok[k]`` says whether row ``k`` holds one."""
 
     tl_s: FloatArray

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from scheduler.generate import random_problem
-from scheduler.kernel import compiled, decode, to_schedule
+from scheduler.kernel import compile_problem, decode, to_schedule
 from scheduler.kernel.critical import critical_chain, task_reasons
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
@@ -60,7 +60,7 @@ def test_reasons_match_the_reference(
     size: tuple[int, int, int, int], start_zones: bool, seed: int
 ) -> None:
     p = random_problem(*size, seed=seed, start_zones=start_zones)
-    inst = compiled(p)
+    inst = compile_problem(p)
     order = np.asarray(p.topological_order, dtype=np.int64)
     code, st = decode(inst, order, np.full(p.n_tasks, -1, dtype=np.int64))
     assert code == 0
@@ -71,7 +71,7 @@ def test_reasons_match_the_reference(
 
 def test_chain_links_are_reasons_and_start_at_the_makespan() -> None:
     p = random_problem(4, 40, 6, 2, seed=3)
-    inst = compiled(p)
+    inst = compile_problem(p)
     order = np.asarray(p.topological_order, dtype=np.int64)
     _code, st = decode(inst, order, np.full(p.n_tasks, -1, dtype=np.int64))
     sched = to_schedule(inst, st)
@@ -88,7 +88,7 @@ def test_chain_links_are_reasons_and_start_at_the_makespan() -> None:
 
 def test_seeded_picks_repeat() -> None:
     p = random_problem(4, 40, 6, 2, seed=5)
-    inst = compiled(p)
+    inst = compile_problem(p)
     _code, st = decode(
         inst,
         np.asarray(p.topological_order, dtype=np.int64),
@@ -106,7 +106,7 @@ def test_empty_problem_has_no_chain() -> None:
     m.add_arm("a")
     p = m.build()
     assert p.n_tasks == 0
-    inst = compiled(p)
+    inst = compile_problem(p)
     assert critical_chain(inst, inst.new_state()) == []
 
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from scheduler import Model, Window, validate
 from scheduler.generate import random_problem
-from scheduler.kernel import compiled, decode, expand, jit_enabled, to_schedule
+from scheduler.kernel import compile_problem, decode, expand, jit_enabled, to_schedule
 from scheduler.search import Evaluator, priority_order
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -21,13 +21,13 @@ SCRIPT = """
 import json, sys
 import numpy as np
 from scheduler.generate import random_problem
-from scheduler.kernel import compiled, decode, expand_blocking, seq_decode, to_schedule, jit_enabled
+from scheduler.kernel import compile_problem, decode, expand_blocking, seq_decode, to_schedule, jit_enabled
 from scheduler.search import priority_order
 out = []
 for seed in range(6):
     # seeds 3..5 carry the generator's blocking oracle (chronological decoding with detours)
     p = random_problem(4, 40, 5, 2, seed=seed, start_zones=True, blocking=seed >= 3)
-    inst = compiled(p)
+    inst = compile_problem(p)
     order = priority_order(p)
     for waits in (True, False):
         code, st = decode(inst, order, np.full(p.n_tasks, -1), waits=waits)
@@ -77,9 +77,9 @@ def test_decoded_schedules_validate_and_use_waits() -> None:
     used_waits = 0
     for seed in range(15):
         p = random_problem(4, 60, 6, 2, seed=seed, start_zones=seed % 2 == 0)
-        code, st = decode(compiled(p), priority_order(p), np.full(p.n_tasks, -1))
+        code, st = decode(compile_problem(p), priority_order(p), np.full(p.n_tasks, -1))
         assert code == 0
-        s = to_schedule(compiled(p), st)
+        s = to_schedule(compile_problem(p), st)
         validate(p, s)
         used_waits += s.total_wait() > 0
     assert used_waits > 0  # the kernel does wait at borders when it helps
@@ -97,9 +97,9 @@ def test_blocked_tasks_are_deferred_until_a_start_zone_frees() -> None:
     m.add_task("b_work")
     m.add_mode("b_work", "B", 5.0)
     p = m.build()
-    code, st = decode(compiled(p), np.array([0, 1]), np.full(2, -1))
+    code, st = decode(compile_problem(p), np.array([0, 1]), np.full(2, -1))
     assert code == 0
-    s = to_schedule(compiled(p), st)
+    s = to_schedule(compile_problem(p), st)
     assert validate(p, s) == 5.0 and s.start[0] == 0.0  # B leaves E at 0 for its task
     # an arm that never leaves keeps the zone for good: nothing can be placed there
     m2 = Model()
@@ -109,7 +109,7 @@ def test_blocked_tasks_are_deferred_until_a_start_zone_frees() -> None:
     m2.add_task("need_e")
     m2.add_mode("need_e", "A", 2.0, windows=[Window("E", 0.0, 2.0)])
     p2 = m2.build()
-    code, _ = decode(compiled(p2), np.array([0]), np.full(1, -1))
+    code, _ = decode(compile_problem(p2), np.array([0]), np.full(1, -1))
     assert code == -1
 
 
@@ -123,8 +123,10 @@ def test_expand_matches_single_placements() -> None:
             for m in p.task_modes[t]:
                 cand_t.append(t)
                 cand_m.append(m)
-    S, end, k, _w, waits = expand(compiled(p), st, np.array(cand_t), np.array(cand_m))
+    S, end, k, _w, waits = expand(compile_problem(p), st, np.array(cand_t), np.array(cand_m))
     for i, (t, m) in enumerate(zip(cand_t, cand_m, strict=True)):
-        S1, e1, k1, waits1 = compiled(p).query(st, t, m, compiled(p).earliest(st, t, False))
+        S1, e1, k1, waits1 = compile_problem(p).query(
+            st, t, m, compile_problem(p).earliest(st, t, False)
+        )
         assert (S1, e1, k1) == (S[i], end[i], k[i])
         assert np.allclose(waits1, waits[i][: len(waits1)])

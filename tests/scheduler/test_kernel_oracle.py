@@ -17,7 +17,7 @@ from scheduler.kernel import (
     EPS,
     Instance,
     State,
-    compiled,
+    compile_problem,
     decode,
     expand_blocking,
     place_blocking,
@@ -69,7 +69,7 @@ def ref_cost(p: Problem, inst: Instance, st: State, m: int, S: float) -> float:
 def ref_decode(p: Problem, order: IntArray, waits: bool) -> tuple[bool, State]:
     """The plain loop the compiled decoder replaces: chronological, the detour
     cost growing with the start to a fixpoint, modes by (end, waits + detour)."""
-    inst = compiled(p)
+    inst = compile_problem(p)
     st = inst.new_state()
     pending = order.tolist()
     while pending:
@@ -122,11 +122,11 @@ def test_compiled_blocking_decode_matches_the_reference_loop(seed: int) -> None:
     order = priority_order(p)
     for waits in (True, False):
         ok_ref, st_ref = ref_decode(with_oracle(base, Counting(oracle.none_every)), order, waits)
-        code, st = decode(compiled(p), order, np.full(p.n_tasks, -1), waits=waits)
+        code, st = decode(compile_problem(p), order, np.full(p.n_tasks, -1), waits=waits)
         assert (code == 0) == ok_ref
         assert same_state(st, st_ref)
         if code == 0:
-            s = to_schedule(compiled(p), st)
+            s = to_schedule(compile_problem(p), st)
             assert validate(p, s) == pytest.approx(float(st.t_end.max()))
             assert s.blocking.sum() > 0 or seed >= 4  # the detours are charged
 
@@ -134,7 +134,7 @@ def test_compiled_blocking_decode_matches_the_reference_loop(seed: int) -> None:
 def test_each_answer_is_asked_once_and_kept_in_the_table() -> None:
     oracle = Counting()
     p = with_oracle(random_problem(4, 30, 4, 1, seed=3), oracle)
-    inst = compiled(p)
+    inst = compile_problem(p)
     order = priority_order(p)
     free = np.full(p.n_tasks, -1)
     code, st1 = decode(inst, order, free)
@@ -154,7 +154,7 @@ def test_prefilled_table_means_no_questions_and_the_same_schedule() -> None:
     p1 = with_oracle(base, asked)
     order = priority_order(p1)
     free = np.full(base.n_tasks, -1)
-    _c, st1 = decode(compiled(p1), order, free)
+    _c, st1 = decode(compile_problem(p1), order, free)
     M, A, T = base.n_modes, base.n_arms, base.n_tasks
     full = np.full((M, A, T + 1), np.nan)
     ref = Counting()
@@ -165,9 +165,9 @@ def test_prefilled_table_means_no_questions_and_the_same_schedule() -> None:
                     full[m, b, pose + 1] = ref.cost(m, b, pose)
     silent = Counting()
     p2 = with_oracle(base, silent)
-    stored = compiled(p2).prefill_blocking(full)
+    stored = compile_problem(p2).prefill_blocking(full)
     assert stored == int(np.count_nonzero(~np.isnan(full)))
-    _c, st2 = decode(compiled(p2), order, free)
+    _c, st2 = decode(compile_problem(p2), order, free)
     assert silent.calls == []
     assert same_state(st1, st2)
 
@@ -182,9 +182,9 @@ def test_an_oracle_table_method_prefills_at_compile_time() -> None:
 
     oracle = WithTable()
     p = with_oracle(base, oracle)
-    code, st = decode(compiled(p), priority_order(p), np.full(p.n_tasks, -1))
+    code, st = decode(compile_problem(p), priority_order(p), np.full(p.n_tasks, -1))
     assert code == 0 and oracle.calls == []
-    assert np.all(to_schedule(compiled(p), st).blocking == 0.0)
+    assert np.all(to_schedule(compile_problem(p), st).blocking == 0.0)
 
 
 def test_bad_answers_and_bad_prefills_are_clear_errors() -> None:
@@ -195,21 +195,21 @@ def test_bad_answers_and_bad_prefills_are_clear_errors() -> None:
     base = random_problem(2, 6, 1, 0, seed=0)
     p = with_oracle(base, Negative())
     with pytest.raises(ValidationError, match=r"returned -1.0 for mode \d+, arm"):
-        decode(compiled(p), priority_order(p), np.full(p.n_tasks, -1))
+        decode(compile_problem(p), priority_order(p), np.full(p.n_tasks, -1))
     q = with_oracle(base, Counting())
     with pytest.raises(ValidationError, match="expected shape"):
-        compiled(q).prefill_blocking(np.zeros((1, 1, 1)))
+        compile_problem(q).prefill_blocking(np.zeros((1, 1, 1)))
     bad = np.zeros((q.n_modes, q.n_arms, q.n_tasks + 1))
     bad[0, 0, 0] = -2.0
     with pytest.raises(ValidationError, match=r"negative cost -2\.0 for mode 0, arm 0, pose -1"):
-        compiled(q).prefill_blocking(bad)
+        compile_problem(q).prefill_blocking(bad)
     with pytest.raises(UsageError, match="no blocking oracle"):
-        compiled(base).prefill_blocking(bad)
+        compile_problem(base).prefill_blocking(bad)
 
 
 def test_batched_and_single_blocking_placements_agree() -> None:
     p = with_oracle(random_problem(4, 30, 4, 1, seed=2), Counting())
-    inst = compiled(p)
+    inst = compile_problem(p)
     order = priority_order(p)
     _c, st = decode(inst, order[:12], np.full(p.n_tasks, -1))
     ct, cm = [], []
@@ -240,18 +240,18 @@ def test_a_parked_arm_in_the_way_for_good_leaves_the_task_unplaced() -> None:
     m.add_mode("a", "A", 2.0)
     m.set_blocking(Wall())
     p = m.build()
-    code, st = decode(compiled(p), np.array([0]), np.full(1, -1))
+    code, st = decode(compile_problem(p), np.array([0]), np.full(1, -1))
     assert code == -1 and st.t_mode[0] == -1
 
 
 def test_blocking_calls_without_an_oracle_are_refused() -> None:
     p = random_problem(2, 6, 1, 0, seed=0)
-    st = compiled(p).new_state()
+    st = compile_problem(p).new_state()
     with pytest.raises(UsageError, match="has no blocking oracle"):
-        expand_blocking(compiled(p), st, np.array([0]), np.array([p.task_modes[0][0]]))
+        expand_blocking(compile_problem(p), st, np.array([0]), np.array([p.task_modes[0][0]]))
     with pytest.raises(UsageError, match="has no blocking oracle"):
-        place_blocking(compiled(p), st, 0, p.task_modes[0][0], 0.0)
+        place_blocking(compile_problem(p), st, 0, p.task_modes[0][0], 0.0)
     with pytest.raises(UsageError, match="has no blocking oracle"):
-        decode(compiled(p), np.arange(6), np.full(6, -1), blocking=True)
-    code, _st = decode(compiled(p), np.arange(6), np.full(6, -1), blocking=False)
+        decode(compile_problem(p), np.arange(6), np.full(6, -1), blocking=True)
+    code, _st = decode(compile_problem(p), np.arange(6), np.full(6, -1), blocking=False)
     assert code == 0

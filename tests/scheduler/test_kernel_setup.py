@@ -10,7 +10,7 @@ import numpy as np
 
 from scheduler import FunctionSetup, MatrixSetup, NoSetup, Problem, TravelSetup
 from scheduler.generate import random_problem
-from scheduler.kernel import compiled, decode, to_schedule
+from scheduler.kernel import compile_problem, decode, to_schedule
 from scheduler.search import priority_order
 
 
@@ -29,26 +29,26 @@ def dense_of(p: Problem) -> np.ndarray:
 
 
 def decoded(p: Problem) -> tuple[list[float], list[int]]:
-    code, st = decode(compiled(p), priority_order(p), np.full(p.n_tasks, -1))
+    code, st = decode(compile_problem(p), priority_order(p), np.full(p.n_tasks, -1))
     assert code == 0
-    s = to_schedule(compiled(p), st)
+    s = to_schedule(compile_problem(p), st)
     return s.start.tolist(), s.mode.tolist()
 
 
 def test_each_kind_decodes_like_its_dense_matrix() -> None:
     base = random_problem(3, 25, 3, 1, seed=4)  # travel setup (Manhattan)
     assert isinstance(base.setup, TravelSetup)
-    assert compiled(base).data.su.kind == 3
+    assert compile_problem(base).data.su.kind == 3
     as_matrix = with_setup(base, MatrixSetup(dense_of(base)))
     as_function = with_setup(base, FunctionSetup(base.setup_time))
-    tables = [compiled(q).data.su for q in (as_matrix, as_function)]
+    tables = [compile_problem(q).data.su for q in (as_matrix, as_function)]
     assert [su.kind for su in tables] == [1, 1]
     assert np.array_equal(tables[0].table, tables[1].table)
     ref = decoded(as_matrix)
     assert decoded(base) == ref
     assert decoded(as_function) == ref
     none = with_setup(base, NoSetup())
-    assert compiled(none).data.su.kind == 0
+    assert compile_problem(none).data.su.kind == 0
     assert decoded(none) == decoded(with_setup(base, MatrixSetup(np.zeros_like(dense_of(base)))))
 
 
@@ -57,9 +57,9 @@ def test_euclidean_travel_is_computed_bit_identically_to_the_bound_setup() -> No
     s = base.setup
     assert isinstance(s, TravelSetup)
     p = with_setup(base, TravelSetup(s.start, s.end, s.home, s.speed, s.base, "euclidean"))
-    assert compiled(p).data.su.kind == 2
+    assert compile_problem(p).data.su.kind == 2
     as_matrix = with_setup(base, MatrixSetup(dense_of(p)))  # the bound setup's own values
-    su = compiled(as_matrix).data.su
+    su = compile_problem(as_matrix).data.su
     assert np.all(su.table[: su.table.size] >= 0)
     # fractional travel times make ties rare: any difference in a setup shows in the starts
     assert decoded(p) == decoded(as_matrix)
@@ -74,7 +74,7 @@ def test_a_callable_setup_is_compact_and_asked_only_for_pairs_an_arm_can_take() 
         return float((a + 2 * prev + 3 * nxt) % 5)
 
     p = with_setup(base, FunctionSetup(fn))
-    su = compiled(p).data.su
+    su = compile_problem(p).data.su
     count = np.bincount(p.mode_arm, minlength=p.n_arms)
     assert su.table.size == int((count * (count + 1)).sum())
     assert su.table.size < p.n_arms * (p.n_tasks + 1) * p.n_tasks

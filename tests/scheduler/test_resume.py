@@ -8,7 +8,7 @@ import pytest
 
 from scheduler import validate
 from scheduler.generate import random_problem
-from scheduler.kernel import compiled, decode, to_schedule
+from scheduler.kernel import compile_problem, decode, to_schedule
 from scheduler.kernel.resume import chunk_size, decode_resume, new_snaps
 from scheduler.search import Evaluator, local_search
 
@@ -23,7 +23,7 @@ def _states_equal(a: object, b: object) -> bool:
 @pytest.mark.parametrize("seed", range(6))
 def test_chunked_decoding_equals_list_decoding_without_deferrals(seed: int) -> None:
     p = random_problem(4, 40, 4, 2, seed=seed)
-    inst = compiled(p)
+    inst = compile_problem(p)
     rng = np.random.default_rng(seed)
     order = np.asarray(p.topological_order, dtype=np.int64)
     modes = np.array([rng.choice(p.task_modes[t]) for t in range(p.n_tasks)], dtype=np.int64)
@@ -40,7 +40,7 @@ def test_chunked_decoding_equals_list_decoding_without_deferrals(seed: int) -> N
 @pytest.mark.parametrize("seed", range(6))
 def test_resuming_from_any_snapshot_gives_the_same_schedule(seed: int) -> None:
     p = random_problem(3, 30, 3, 1, seed=seed, start_zones=seed % 2 == 0)
-    inst = compiled(p)
+    inst = compile_problem(p)
     order = np.asarray(p.topological_order, dtype=np.int64)
     free = np.full(p.n_tasks, -1, dtype=np.int64)
     e = 4

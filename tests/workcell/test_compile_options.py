@@ -252,7 +252,7 @@ def test_compiling_keeps_nothing_in_module_globals() -> None:
     """No registry of compiled cells: compiling again grows no module-level
     container of ours. The one module-level memo, the zone solids of the
     sweep (derived arrays of immutable zone maps), is bounded."""
-    from workcell.geometry import sweep
+    from workcell.geometry import zone_sweep
 
     cell = load_example("supersigma")
     compile_cell(cell, options=CompileOptions(grid=0.6))  # imports and warm caches
@@ -261,9 +261,9 @@ def test_compiling_keeps_nothing_in_module_globals() -> None:
         compile_cell(cell, options=CompileOptions(grid=grid))
     after = _module_containers()
     grown = {k: (before.get(k), n) for k, n in after.items() if n != before.get(k)}
-    memo = ("workcell.geometry.sweep", "_SOLIDS")
+    memo = ("workcell.geometry.zone_sweep", "_SOLIDS")
     assert set(grown) <= {memo}, grown
-    assert len(sweep._SOLIDS) <= sweep._SOLIDS_SIZE
+    assert len(zone_sweep._SOLIDS) <= zone_sweep._SOLIDS_SIZE
 
 
 def test_compile_and_oracle_do_not_import_each_other() -> None:

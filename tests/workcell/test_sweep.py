@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from multiarm.errors import FormatError, UsageError, ValidationError
-from scheduler import solve, validate
+from scheduler import REGISTRY, solve, validate
 from scheduler.generate import random_problem
 from workcell.cli import main
 from workcell.experiments import (
@@ -186,9 +186,16 @@ def test_a_local_run_records_validated_makespans_and_provenance(tmp_path: Path) 
         assert row["n_tasks"] == 6 and row["status"] in ("feasible", "optimal")
         assert row["makespan"] == row["objective"]
         assert row["lower_bound"] <= row["makespan"]
-        if row["solver"] == "greedy":  # the same run by hand gives the same validated makespan
-            r = solve(p, "greedy", time_limit=None, seed=int(row["seed"]))
-            assert r.schedule is not None and validate(p, r.schedule) == row["makespan"]
+        # every run is the run scheduler.solve gives with the same typed options
+        # (CP-SAT's work limit included): same status, makespan, objective, bound
+        options = REGISTRY[str(row["solver"])].options(**json.loads(str(row["options"])))
+        r = solve(p, str(row["solver"]), time_limit=None, seed=int(row["seed"]), options=options)
+        assert r.schedule is not None and validate(p, r.schedule) == row["makespan"]
+        assert (r.status.value, r.objective, r.bound) == (
+            row["status"],
+            row["objective"],
+            row["bound"],
+        )
     row = df.iloc[0]
     from multiarm import __version__
 
@@ -246,14 +253,48 @@ def _stop(rows: list[dict[str, Any]], n: int) -> None:
         raise KeyboardInterrupt
 
 
+def test_a_broken_instance_file_stops_the_sweep_naming_the_file_and_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # issue 18: a broken instance file used to end a sweep with "2 failed",
+    # naming neither the file nor the error; it is now read before any run
+    (tmp_path / "data").mkdir()
+    (tmp_path / "data" / "ok.fjs").write_text("1 1 1\n1 1 1 3\n")
+    (tmp_path / "data" / "bad.fjs").write_text("1 1 1\n1 1 1 x\n")
+    fjsp = '[[instances]]\nkind = "fjsp"\nfiles = ["data/*.fjs"]\n[[solvers]]\nsolver = "greedy"\n'
+    with pytest.raises(ValidationError) as info:
+        load_sweep(write(tmp_path, fjsp, "s.toml"))
+    msg = str(info.value)
+    assert msg.startswith(f"{tmp_path / 's.toml'}: instances[0].files[0]: instance file is broken")
+    assert "bad.fjs" in msg and ":2" in msg  # the instance file and its line
+    (tmp_path / "cell.toml").write_text('name = "broken"\nzones = "builtin:scara4"\n')
+    cells = '[[instances]]\nkind = "cell"\ncells = ["scara4", "cell.toml"]\n[[solvers]]\nsolver = "greedy"\n'
+    with pytest.raises(
+        ValidationError, match=r"instances\[0\]\.cells\[1\]: instance file is broken: .*cell\.toml"
+    ):
+        load_sweep(write(tmp_path, cells, "c.toml"))
+    out = tmp_path / "r.parquet"
+    assert main(["sweep", str(tmp_path / "c.toml"), "--no-progress", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert (
+        err.startswith(f"error: {tmp_path / 'c.toml'}: instances[0].cells[1]")
+        and "cell.toml" in err
+    )
+    assert len(err.strip().splitlines()) == 1 and not out.exists()
+
+
 def test_a_failing_run_is_recorded_and_the_others_go_on(tmp_path: Path) -> None:
-    (tmp_path / "broken.toml").write_text('name = "broken"\nzones = "builtin:scara4"\n')
+    cell = tmp_path / "broken.toml"
+    cell.write_text((ROOT / "workcell" / "examples" / "scara4.toml").read_text())
     text = TINY.replace(
         '[[solvers]]\nsolver = "greedy"',
         '[[instances]]\nkind = "cell"\ncells = ["broken.toml"]\n\n[[solvers]]\nsolver = "greedy"',
         1,
     )
     sweep = parse_sweep(text, filename="tiny.toml", base_dir=tmp_path)
+    # the file breaks after the sweep was read (edited meanwhile, or another
+    # copy on a cluster's workers): its runs fail, the others go on
+    cell.write_text('name = "broken"\nzones = "builtin:scara4"\n')
     outcome = run_sweep(sweep, workers=1, progress=False)
     assert (outcome.total, outcome.failed) == (9, 3)
     df = outcome.results()
@@ -263,6 +304,19 @@ def test_a_failing_run_is_recorded_and_the_others_go_on(tmp_path: Path) -> None:
     assert bad["error"].str.contains("broken.toml").all()
     assert (bad["makespan"] == math.inf).all()
     assert (df[df["status"] != "error"]["makespan"] < math.inf).all()
+    # each failure is named with its instance file, solver and error
+    assert len(outcome.failures) == 3
+    assert all(
+        f.startswith("cell/broken (broken.toml) [")
+        and ": ValidationError: " in f
+        and "broken.toml" in f.split("ValidationError: ")[1]
+        for f in outcome.failures
+    )
+    report = outcome.report()
+    assert (
+        sum(line.startswith("failed: cell/broken (broken.toml)") for line in report.splitlines())
+        == 3
+    )
     # failures are not retried unless asked
     assert run_sweep(sweep, workers=1, progress=False).ran == 0
     again = run_sweep(sweep, workers=1, progress=False, retry_failed=True)
@@ -294,6 +348,26 @@ def test_the_sweep_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     text = capsys.readouterr().out
     assert "sweep 'tiny': 6 runs, 1 processes" in text
     assert "6 runs in" in text and "0 already done, 0 failed" in text and str(out) in text
+    # the result table: one line per family and solver label, two instances each
+    lines = text.splitlines()
+    head = next(i for i, line in enumerate(lines) if line.startswith("family"))
+    assert lines[head].split() == [
+        "family",
+        "solver",
+        "runs",
+        "failed",
+        "makespan",
+        "gap",
+        "time",
+        "(s)",
+    ]
+    rows = {line.split()[1]: line.split() for line in lines[head + 1 : head + 4]}
+    assert set(rows) == {"greedy", "tree", "cpsat"}
+    df = read_results(out)
+    for label, row in rows.items():
+        mine = df[df["label"] == label]
+        assert row[0] == "generated" and row[2:4] == ["2", "0"]
+        assert float(row[4]) == pytest.approx(mine["makespan"].mean(), abs=0.05)
     assert main(["sweep", str(path), "--workers", "1", "--no-progress", "--out", str(out)]) == 0
     assert "0 runs in" in capsys.readouterr().out
     bad = write(tmp_path, TINY.replace("kind =", "kind ="[:-1]), "bad.toml")

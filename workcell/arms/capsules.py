@@ -1,7 +1,7 @@
 """Capsules fitted around point sets: conservative stand-ins for link meshes.
 
 An arm described by URDF carries one collision mesh per link; the compiled
-sweep and state checks (:mod:`workcell.geometry.sweep`) work on capsules.
+sweep and state checks (:mod:`workcell.geometry.zone_sweep`) work on capsules.
 :func:`fit_capsule` finds a capsule that **contains** every given point (the
 vertices of a mesh, so the whole mesh: a capsule is convex, and a mesh lies
 in the convex hull of its vertices), with as little volume as a small search

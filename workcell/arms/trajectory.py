@@ -14,7 +14,7 @@ ending at rest:
 Between two consecutive knot times (segment boundaries) every joint moves
 monotonically from its start value to its end value, because every profile
 is rest to rest with a non-negative speed. The conservative zone sweep
-(:mod:`workcell.geometry.sweep`) relies on this.
+(:mod:`workcell.geometry.zone_sweep`) relies on this.
 
 Examples
 --------

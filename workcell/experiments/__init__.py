@@ -8,20 +8,33 @@
   machinery is split by job: :mod:`~workcell.experiments.spec` (the sweep
   file's schema and validation), :mod:`~workcell.experiments.grid` (its
   records), :mod:`~workcell.experiments.instances` (problem factories),
-  :mod:`~workcell.experiments.runner` (one run, through the scheduler),
+  :mod:`~workcell.experiments.runner` (one run, through :func:`scheduler.solve`),
   :mod:`~workcell.experiments.executors` (local pool, Dask);
   :mod:`workcell.experiments.sweep` gathers the public names.
 * :func:`read_results` reads the Parquet results (one row per run, with
-  provenance) into pandas (:mod:`workcell.experiments.results`).
-* :mod:`workcell.experiments.analysis`: performance profiles, gap over time,
-  time to target, scaling and box plots, and the benchmark tables (imported
-  on its own: it needs matplotlib).
+  provenance) into pandas: :mod:`~workcell.experiments.results` (the journal
+  and Parquet), :mod:`~workcell.experiments.rows` (the columns and rows),
+  :mod:`~workcell.experiments.provenance` (where a run comes from).
+* :mod:`workcell.experiments.analysis`: references and gaps
+  (:mod:`~workcell.experiments.analysis.gaps`), performance profiles, gap
+  over time, time to target, scaling and box plots
+  (:mod:`~workcell.experiments.analysis.plots`, drawn with matplotlib), the
+  benchmark tables and the end-of-sweep summary
+  (:mod:`~workcell.experiments.analysis.tables`).
+
+Modules import one way: ``sweep`` (the names) > ``executors`` > ``spec``,
+``runner``, ``results``, ``analysis.tables``; ``runner`` > ``instances``,
+``rows``; ``results`` > ``rows`` > ``provenance``, ``grid``; ``spec`` >
+``instances`` > ``grid``; ``analysis`` reads results frames and imports
+none of them. Only the optional dependencies (pandas, pyarrow, matplotlib,
+tqdm, dask.distributed) are imported inside functions.
 
 The command ``multiarm sweep FILE [--dask-address ADDRESS] [--workers N]`` runs a sweep file.
 """
 
 from workcell.experiments.executors import check_dask_address
-from workcell.experiments.results import COLUMNS, read_results, write_results
+from workcell.experiments.results import read_results, write_results
+from workcell.experiments.rows import COLUMNS
 from workcell.experiments.sweep import (
     BENCHMARK,
     InstanceSpec,

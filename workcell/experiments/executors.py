@@ -25,8 +25,10 @@ from pathlib import Path
 from typing import Any
 
 from multiarm.errors import UsageError
+from workcell.experiments.analysis.tables import summary_table
 from workcell.experiments.grid import Run, Sweep
-from workcell.experiments.results import Journal, error_row, read_results
+from workcell.experiments.results import Journal, read_results
+from workcell.experiments.rows import error_row
 from workcell.experiments.runner import run_one
 from workcell.experiments.spec import load_sweep
 
@@ -51,6 +53,10 @@ class SweepOutcome:
     keys : frozenset of str
         The keys of the sweep's runs (its results file may also hold runs of
         an earlier version of the sweep file).
+    failures : tuple of str
+        One line per run recorded now with status ``"error"``: its instance
+        (family/name and the instance file, where there is one), solver
+        label, seed, and the error's type and message.
     """
 
     out: Path
@@ -60,6 +66,7 @@ class SweepOutcome:
     failed: int
     wall_time: float
     keys: frozenset[str] = frozenset()
+    failures: tuple[str, ...] = ()
 
     @property
     def runs_per_minute(self) -> float:
@@ -83,6 +90,26 @@ class SweepOutcome:
         if current:
             df = df[df["key"].isin(self.keys)].reset_index(drop=True)
         return df
+
+    def report(self) -> str:
+        """What ``multiarm sweep`` prints at the end: the result table, each failure, the totals.
+
+        Returns
+        -------
+        str
+            :func:`~workcell.experiments.analysis.summary_table` of the
+            sweep's runs, then one line per run that failed now (naming its
+            instance, file and error), then the counts and the results file.
+        """
+        lines = []
+        if self.out.exists() or self.out.with_name(self.out.name + ".journal").exists():
+            lines.append(summary_table(self.results(current=True)))
+        lines += [f"failed: {f}" for f in self.failures]
+        lines.append(
+            f"{self.ran} runs in {self.wall_time:.1f} s ({self.runs_per_minute:.1f} runs/min), "
+            f"{self.skipped} already done, {self.failed} failed; results: {self.out}"
+        )
+        return "\n".join(lines)
 
 
 def _progress_bar(total: int, initial: int, enabled: bool, desc: str) -> Any:
@@ -282,6 +309,7 @@ def run_sweep(
     skipped = len(runs) - len(pending)
     bar = _progress_bar(len(runs), skipped, progress and bool(pending), spec.name)
     ran = failed = 0
+    failures: list[str] = []
     rows: Iterable[dict[str, Any]] = (
         _iter_local(pending, workers) if dask_address is None else _iter_dask(pending, dask_address)
     )
@@ -289,7 +317,9 @@ def run_sweep(
         for row in rows:
             journal.append(row)
             ran += 1
-            failed += row["status"] == "error"
+            if row["status"] == "error":
+                failed += 1
+                failures.append(_failure_line(row))
             if on_row is not None:
                 on_row(row)
             if bar is not None:
@@ -308,4 +338,17 @@ def run_sweep(
         failed,
         time.perf_counter() - t0,
         frozenset(r.key for r in runs),
+        tuple(failures),
+    )
+
+
+def _failure_line(row: dict[str, Any]) -> str:
+    """``family/instance (file) [label, seed s]: ErrorType: first line of the message``."""
+    source = str(row.get("source") or "")
+    where = f"{row.get('family')}/{row.get('instance')}"
+    if source and source != row.get("instance") and row.get("kind") != "benchmark":
+        where += f" ({source})"
+    message = (str(row.get("error") or "").strip().splitlines() or [""])[0]
+    return (
+        f"{where} [{row.get('label')}, seed {row.get('seed')}]: {row.get('error_type')}: {message}"
     )

@@ -81,8 +81,8 @@ class SolverConfig:
     time_limit : float or None
         Seconds of wall clock (None: a work-limited run).
     options : tuple of (str, object)
-        Fields of the solver's options class (and, for ``cpsat``,
-        ``max_deterministic_time``), sorted by name.
+        Fields of the solver's options class (work limits included:
+        ``max_evaluations``, CP-SAT's ``max_deterministic_time``), sorted by name.
     seeds : tuple of int or "instance"
     """
 

@@ -7,17 +7,14 @@ import sys
 from collections.abc import Callable, Sequence
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from multiarm.errors import UsageError
-from scheduler import read_fjsp
+from scheduler import Problem, read_fjsp
 from scheduler.generate import random_problem
 from workcell.cell import EXAMPLES, load_cell, load_example
 from workcell.compile import compile_cell
 from workcell.experiments.grid import InstanceSpec
-
-if TYPE_CHECKING:
-    from scheduler import Problem
 
 __all__ = [
     "CAMPAIGN_BATCH",

@@ -5,45 +5,25 @@ from __future__ import annotations
 import math
 import time
 import traceback
-from dataclasses import fields
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from scheduler import REGISTRY, lower_bound, solve, validate
-from scheduler.cpsat import solve_cpsat
+from scheduler import REGISTRY, Problem, Result, lower_bound, solve, validate
 from scheduler.kernel import warm_up
-from scheduler.solve import CpSatOptions
 from workcell.experiments.grid import Run, SolverConfig
 from workcell.experiments.instances import benchmark_function, build_problem
-from workcell.experiments.results import benchmark_row, error_row, result_row
-
-if TYPE_CHECKING:
-    from scheduler import Problem, Result
+from workcell.experiments.rows import benchmark_row, error_row, result_row
 
 __all__ = ["run_one"]
 
 
 def _solve(problem: Problem, config: SolverConfig, seed: int) -> Result:
-    opts = dict(config.options)
-    cls = REGISTRY[config.solver].options
-    if (
-        config.solver == "cpsat"
-        and "max_deterministic_time" in opts
-        and "max_deterministic_time" not in {f.name for f in fields(cls)}
-    ):
-        # CP-SAT's deterministic time is a work limit: the run depends on the seed only
-        # (passed straight to solve_cpsat where CpSatOptions does not take it)
-        dt = float(opts.pop("max_deterministic_time"))
-        o = CpSatOptions(**opts)
-        return solve_cpsat(
-            problem,
-            config.time_limit,
-            seed,
-            workers=o.workers,
-            hint=o.hint,
-            log=o.log,
-            max_deterministic_time=dt,
-        )
-    options = cls(**opts)
+    """Solve through :func:`scheduler.solve` with the configuration's typed options.
+
+    Every option of a sweep file is a field of the solver's options class
+    (:data:`scheduler.REGISTRY`), work limits included (``max_evaluations``,
+    CP-SAT's ``max_deterministic_time``), so no run bypasses the one solve.
+    """
+    options = REGISTRY[config.solver].options(**dict(config.options))
     return solve(problem, config.solver, time_limit=config.time_limit, seed=seed, options=options)  # type: ignore[arg-type]
 
 
@@ -68,7 +48,7 @@ def run_one(run: Run) -> dict[str, Any]:
     Returns
     -------
     dict
-        One row (:data:`workcell.experiments.results.COLUMNS`).
+        One row (:data:`workcell.experiments.rows.COLUMNS`).
     """
     t0 = time.perf_counter()
     started = time.time()

@@ -70,7 +70,9 @@ with ``workers = 1``) for ``cpsat``; ``greedy`` is one list pass.
 
 Every error names the file and the field (``fjsp.toml: solvers[1].options:
 TreeOptions.workers must be an int >= 1, got 0``); TOML syntax errors give
-``file:line:col``.
+``file:line:col``. Every FJSP file and cell file an instance names is read
+once when the sweep file is, so a broken one stops the sweep before any run,
+naming the sweep file, the field, the instance file and its own error.
 """
 
 from __future__ import annotations
@@ -88,8 +90,8 @@ from typing import Any
 
 from multiarm.errors import FormatError, MultiarmError, UsageError
 from multiarm.text import parse_toml, read_source
-from scheduler import REGISTRY, SOLVERS
-from workcell.cell import EXAMPLES
+from scheduler import REGISTRY, SOLVERS, read_fjsp
+from workcell.cell import EXAMPLES, load_cell
 from workcell.experiments._fields import (
     _int,
     _list,
@@ -140,9 +142,22 @@ _GENERATOR_KEYS = {
     "grid": int,
 }
 _SOLVER_KEYS = {"label", "solver", "time_limit", "seeds", "options"}
-_CPSAT_RUNNER_KEYS = {"max_deterministic_time"}
-"""CP-SAT options the runner passes to ``scheduler.cpsat.solve_cpsat`` itself."""
 _FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
+
+
+def _readable(w: _Where, field: str, path: Path, read: Any) -> None:
+    """Read an instance file once now, so that a broken one stops the sweep before any run.
+
+    The error names the sweep file, the field and the instance file's own
+    error (which carries the instance file and, for syntax, ``line:col``).
+    """
+    try:
+        read(path)
+    except MultiarmError as exc:
+        shown = str(exc)
+        if fspath(path) not in shown and path.name not in shown:
+            shown = f"{fspath(path)}: {shown}"
+        raise w.fail(field, f"instance file is broken: {shown}") from None
 
 
 # ------------------------------------------------------------------ parsing
@@ -352,6 +367,7 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
             if not matches:
                 raise w.fail(f"{where}.files[{j}]", f"{pat!r} matches no file (looked for {full})")
             for m in matches:
+                _readable(w, f"{where}.files[{j}]", Path(m), read_fjsp)
                 rel = m if Path(pat).is_absolute() else os.path.relpath(m, base)
                 out.append(
                     InstanceSpec(
@@ -422,6 +438,7 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
                     f"{where}.cells[{j}]",
                     f"{c!r} is neither a built-in cell ({', '.join(EXAMPLES)}) nor a file",
                 )
+            _readable(w, f"{where}.cells[{j}]", p, load_cell)
             out.append(
                 InstanceSpec(
                     "cell",
@@ -448,6 +465,8 @@ def _campaign(
                 f"{where}.cells[{j}]",
                 f"{c!r} is neither a built-in cell ({', '.join(EXAMPLES)}) nor a file",
             )
+        if c not in EXAMPLES:
+            _readable(w, f"{where}.cells[{j}]", p, load_cell)
         cells.append(c if c in EXAMPLES else fspath(p.resolve()))
     episodes = _int(w, item.get("episodes"), f"{where}.episodes", least=1)
     batch = _int(w, item.get("batch", CAMPAIGN_BATCH), f"{where}.batch", least=1)
@@ -514,27 +533,19 @@ def _solvers(w: _Where, item: Mapping[str, Any], where: str) -> list[SolverConfi
     opts = dict(_table(w, item.get("options", {}), f"{where}.options"))
     cls = REGISTRY[solver].options
     names = {f.name for f in fields(cls)}
-    runner = {
-        k: opts.pop(k)
-        for k in list(opts)
-        if solver == "cpsat" and k in _CPSAT_RUNNER_KEYS and k not in names
-    }
     for k in opts:
         if k not in names:
-            extra = sorted(names | (_CPSAT_RUNNER_KEYS if solver == "cpsat" else set()))
             raise w.fail(
                 f"{where}.options.{k}",
-                f"solver {solver!r} has no option {k!r} (it takes: {', '.join(extra)})",
+                f"solver {solver!r} has no option {k!r} (it takes: {', '.join(sorted(names))})",
             )
     try:
         cls(**opts)
     except MultiarmError as exc:
         raise w.fail(f"{where}.options", str(exc)) from None
-    if "max_deterministic_time" in runner:
-        runner["max_deterministic_time"] = _number(
-            w, runner["max_deterministic_time"], f"{where}.options.max_deterministic_time"
-        )
-    options = tuple(sorted({**opts, **runner}.items()))
+    if opts.get("max_deterministic_time") is not None:  # a float in the run's key, as before
+        opts["max_deterministic_time"] = float(opts["max_deterministic_time"])
+    options = tuple(sorted(opts.items()))
     raw_seeds = _list(w, item.get("seeds", [0]), f"{where}.seeds")
     seeds: list[int | str] = []
     for j, s in enumerate(raw_seeds):
@@ -555,7 +566,7 @@ def _solvers(w: _Where, item: Mapping[str, Any], where: str) -> list[SolverConfi
     if None in limits:
         work = {
             "tree": "max_evaluations" in opts,
-            "cpsat": "max_deterministic_time" in runner or "max_deterministic_time" in opts,
+            "cpsat": opts.get("max_deterministic_time") is not None,
             "greedy": True,
         }[solver]
         if not work:

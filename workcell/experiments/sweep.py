@@ -7,7 +7,9 @@ The sweep machinery is split by job; this module gathers its public names
 * :mod:`workcell.experiments.instances` -- problem factories;
 * :mod:`workcell.experiments.runner` -- one run, through :func:`scheduler.solve`;
 * :mod:`workcell.experiments.executors` -- this process, a local pool, Dask;
-* :mod:`workcell.experiments.results` -- the journal, Parquet and provenance.
+* :mod:`workcell.experiments.results` -- the journal and Parquet
+  (:mod:`~workcell.experiments.rows` the rows, :mod:`~workcell.experiments.provenance`
+  where they come from).
 
 Examples
 --------

@@ -2,7 +2,7 @@
 
 * :mod:`workcell.geometry.world`: :class:`CollisionWorld`, named FCL objects in
   groups with broadphase managers (the only module importing ``fcl``);
-* :mod:`workcell.geometry.sweep`: :func:`zone_windows`, the conservative sweep
+* :mod:`workcell.geometry.zone_sweep`: :func:`zone_windows`, the conservative sweep
   of an arm's shapes through the zones (occupancy and moving windows, S2.5),
   :func:`static_occupancy`, :func:`swept_aabb`;
 * :mod:`workcell.geometry.planner`: :func:`plan_detour`, collision-free
@@ -21,7 +21,8 @@ from workcell.geometry.planner import (
     plan_detour,
     write_ompl_benchmark_log,
 )
-from workcell.geometry.sweep import (
+from workcell.geometry.world import CollisionReport, CollisionWorld
+from workcell.geometry.zone_sweep import (
     JointTrajectoryLike,
     ZoneWindow,
     ZoneWindows,
@@ -34,7 +35,6 @@ from workcell.geometry.sweep import (
     zone_contacts,
     zone_windows,
 )
-from workcell.geometry.world import CollisionReport, CollisionWorld
 
 __all__ = [
     "CollisionReport",

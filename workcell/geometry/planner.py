@@ -20,7 +20,7 @@ This is the only module of the package that imports :mod:`ompl`.
   resolution`` the check is exact in the conservative direction: every
   point of the arm is within ``resolution`` of a checked pose, and those
   poses keep ``clearance`` from every obstacle (the same argument as the
-  zone sweep, :mod:`workcell.geometry.sweep`). A coarser resolution is faster
+  zone sweep, :mod:`workcell.geometry.zone_sweep`). A coarser resolution is faster
   and, with clearance, rejects some paths that exist (the S2.12 compromise).
 * Prepared obstacles and contexts are cached per (arm, obstacle set); OMPL
   objects are made per call and dropped at its end (``notes/deps.md`` §1).
@@ -73,9 +73,9 @@ from multiarm.errors import InternalError, ValidationError
 from multiarm.types import FloatArray, IntArray, Transform
 from workcell.arms._kinematics_jit import frame_products
 from workcell.arms.base import Arm, LinkShape, shape_frames
-from workcell.geometry._sweep_jit import capsules_touch, pose_near, segment_points
-from workcell.geometry.sweep import JointTrajectoryLike, _shape_capsules, sample_trajectory
+from workcell.geometry._zone_sweep_jit import capsules_touch, pose_near, segment_points
 from workcell.geometry.world import CollisionWorld
+from workcell.geometry.zone_sweep import JointTrajectoryLike, _shape_capsules, sample_trajectory
 
 __all__ = [
     "DetourPlanner",
@@ -747,7 +747,7 @@ def first_contact(
     """When a trajectory may first touch the obstacles (e.g. an arm parked in its way, S2.6).
 
     The trajectory is sampled as in the zone sweep
-    (:func:`workcell.geometry.sweep.sample_trajectory`: knots plus a grid,
+    (:func:`workcell.geometry.zone_sweep.sample_trajectory`: knots plus a grid,
     bisected until the displacement bound between samples is at most
     ``padding``) and the arm's shapes, grown by ``padding``, are checked at
     every sample. A true contact at a time ``t`` flags the sample just

@@ -8,7 +8,7 @@ cuts the space where at least two arms can reach into cubic **blocks** and
 makes each block that two or more arms' modes touch an implicit exclusive
 zone (named ``grid_i_j_k``, :func:`block_name`). Each mode gets the block's occupancy windows from
 the same conservative sweep as the SDL zones
-(:func:`workcell.geometry.sweep.zone_contacts`). Two arms can only touch at a
+(:func:`workcell.geometry.zone_sweep.zone_contacts`). Two arms can only touch at a
 point that lies in some block, and then both occupy that block at that time,
 which the scheduler never allows: so two arms never meet, whatever they do
 between samples (the sweep's guarantee). Coarser blocks give fewer zones and
@@ -37,7 +37,7 @@ import numpy as np
 from multiarm.errors import ValidationError
 from multiarm.types import BoolArray, FloatArray
 from workcell.arms.base import Arm
-from workcell.geometry.sweep import _runs, _segments, _shape_capsules
+from workcell.geometry.zone_sweep import _runs, _segments, _shape_capsules
 from zones.geometry import AABox
 from zones.model import Zone, ZoneMap
 

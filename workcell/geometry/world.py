@@ -144,7 +144,7 @@ def primitive_geometry(prim: Primitive) -> Any:
     Boxes, cylinders and spheres map to FCL primitives; ``convex`` to
     ``fcl.Convex`` (vertices in the cell frame); ``mesh`` to a ``BVHModel``
     (its *surface*: a shape entirely inside a mesh does not collide with it,
-    see :func:`workcell.geometry.sweep.reference_contacts`).
+    see :func:`workcell.geometry.zone_sweep.reference_contacts`).
 
     Parameters
     ----------

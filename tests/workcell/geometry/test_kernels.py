@@ -7,9 +7,9 @@ import numpy as np
 
 from workcell.arms import CartesianGantry, Scara, SerialArm
 from workcell.arms._common import pose_xyz_yaw
-from workcell.geometry._sweep_jit import _segment_distance, capsules_touch, pose_near
+from workcell.geometry._zone_sweep_jit import _segment_distance, capsules_touch, pose_near
 from workcell.geometry.planner import DetourPlanner, ObstacleSet
-from workcell.geometry.sweep import (
+from workcell.geometry.zone_sweep import (
     _segments,
     _segments_numpy,
     _shape_capsules,

@@ -4,7 +4,7 @@
 one typed tuple (numba compiles functions of named tuples of arrays);
 :class:`State` is a partial schedule, :class:`Scratch` the work buffers of one
 query and :class:`OracleTable` the answered blocking-oracle costs.
-:class:`Instance` wraps them for Python callers; :func:`compiled` builds it
+:class:`Instance` wraps them for Python callers; :func:`compile_problem` builds it
 once per problem and caches it here (by identity, until the problem is collected), so the
 problem module never imports the kernel.
 
@@ -38,7 +38,7 @@ __all__ = [
     "OracleTable",
     "Scratch",
     "State",
-    "compiled",
+    "compile_problem",
 ]
 
 
@@ -375,7 +375,7 @@ def _compile(p: Problem) -> tuple[Arrays, int, int, int]:
 
 
 class Instance:
-    """A problem compiled for the kernel; get it with :func:`compiled`.
+    """A problem compiled for the kernel; get it with :func:`compile_problem`.
 
     Parameters
     ----------
@@ -394,8 +394,8 @@ class Instance:
     --------
     >>> from scheduler.generate import random_problem
     >>> p = random_problem(2, 5, 1, 0, seed=0)
-    >>> inst = compiled(p)
-    >>> inst is compiled(p), inst.data.mode_dur.shape == (p.n_modes,)
+    >>> inst = compile_problem(p)
+    >>> inst is compile_problem(p), inst.data.mode_dur.shape == (p.n_modes,)
     (True, True)
     """
 
@@ -718,8 +718,12 @@ _CACHE: dict[int, Instance] = {}
 collected (keyed by identity: two equal problems are still two instances)."""
 
 
-def compiled(problem: Problem) -> Instance:
+def compile_problem(problem: Problem) -> Instance:
     """The kernel's compiled :class:`Instance` of ``problem``, built once and cached.
+
+    *Compiling* here turns a scheduling :class:`~scheduler.problem.Problem`
+    into the kernel's flat arrays; ``workcell.compile_cell`` (a cell into a
+    Problem) is the other compile of the package. Formerly ``compiled``.
 
     Parameters
     ----------
@@ -733,7 +737,7 @@ def compiled(problem: Problem) -> Instance:
     --------
     >>> from scheduler.generate import random_problem
     >>> p = random_problem(2, 4, 1, 0, seed=1)
-    >>> compiled(p).n_tasks == p.n_tasks
+    >>> compile_problem(p).n_tasks == p.n_tasks
     True
     """
     key = id(problem)

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from workcell.arms import Scara
-from workcell.geometry import sweep
-from workcell.geometry.sweep import _arm_contacts_numpy, _contacts_block_numpy, arm_contacts
+from workcell.geometry import zone_sweep
+from workcell.geometry.zone_sweep import _arm_contacts_numpy, _contacts_block_numpy, arm_contacts
 
 
 def _rotation(rng: np.random.Generator) -> np.ndarray:
@@ -15,7 +15,7 @@ def _rotation(rng: np.random.Generator) -> np.ndarray:
     return q * np.sign(np.diag(r))
 
 
-def _solids(rng: np.random.Generator, n: int) -> sweep._Solids:
+def _solids(rng: np.random.Generator, n: int) -> zone_sweep._Solids:
     faces = 6
     cvx_n = np.zeros((n, faces + 2, 3))  # two zero rows: the padding of ragged hulls
     cvx_b = np.ones((n, faces + 2))
@@ -25,7 +25,7 @@ def _solids(rng: np.random.Generator, n: int) -> sweep._Solids:
         cvx_b[k, :faces] = rng.uniform(0.05, 0.3, faces) + cvx_n[k, :faces] @ rng.uniform(-1, 1, 3)
     cvx_n[0, 0] = (1.0, 0.0, 0.0)  # an axis-aligned face: segments parallel to it are common
     zones = lambda: rng.integers(0, 5, n).astype(np.int64)  # noqa: E731
-    return sweep._Solids(
+    return zone_sweep._Solids(
         sph_c=rng.uniform(-1, 1, (n, 3)),
         sph_r=rng.uniform(0.01, 0.3, n),
         sph_z=zones(),
@@ -55,7 +55,7 @@ def test_compiled_zone_contacts_equal_the_numpy_reference(seed: int) -> None:
     p1[50:100, 1, 2] = p0[50:100, 1, 2]  # segments flat along an axis
     rad = rng.uniform(0.0, 0.1, 3)
     want = _contacts_block_numpy(p0, p1, rad, solids, 5)
-    got = sweep._contacts_block(p0, p1, rad, solids, 5)
+    got = zone_sweep._contacts_block(p0, p1, rad, solids, 5)
     assert want.any() and not want.all()  # the case discriminates
     np.testing.assert_array_equal(got, want)
 

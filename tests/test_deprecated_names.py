@@ -1,0 +1,47 @@
+"""Renamed names keep their old path for one release, warn, and hand on the new object
+(issue 20: names that mean one thing)."""
+
+from __future__ import annotations
+
+import importlib
+
+import pytest
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "name"),
+    [
+        ("workcell.geometry.sweep", "workcell.geometry.zone_sweep", "zone_windows"),
+        ("workcell.geometry.sweep", "workcell.geometry.zone_sweep", "_segments"),
+        ("workcell.geometry._sweep_jit", "workcell.geometry._zone_sweep_jit", "capsules_touch"),
+        ("scheduler.kernel", "scheduler.kernel", "compile_problem"),
+    ],
+)
+def test_an_old_path_warns_and_hands_on_the_new_object(old: str, new: str, name: str) -> None:
+    old_name = "compiled" if old == "scheduler.kernel" else name
+    with pytest.warns(DeprecationWarning, match=f"{old}.{old_name} is deprecated"):
+        value = getattr(importlib.import_module(old), old_name)
+    assert value is getattr(importlib.import_module(new), name)
+
+
+def test_an_unknown_name_is_still_an_attribute_error() -> None:
+    import scheduler.kernel
+    import workcell.geometry.sweep
+
+    with pytest.raises(AttributeError):
+        _ = workcell.geometry.sweep.no_such_name
+    with pytest.raises(AttributeError, match="no attribute 'no_such_name'"):
+        _ = scheduler.kernel.no_such_name
+
+
+def test_the_new_names_do_not_warn() -> None:
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)
+        from scheduler.generate import random_problem
+        from scheduler.kernel import compile_problem
+        from workcell.geometry.zone_sweep import zone_windows
+
+        p = random_problem(2, 4, 1, 0, seed=1)
+        assert compile_problem(p).n_tasks == p.n_tasks and callable(zone_windows)
