@@ -73,7 +73,7 @@ PlanWith = Literal["nominal", "worst"]
 Park = Literal["home", "last"]
 Releases = Literal["expected", "sample", "none"]
 
-EXAMPLES: tuple[str, ...] = ("supersigma", "scara4", "cell8", "urdf_cell")
+EXAMPLES: tuple[str, ...] = ("supersigma", "scara4", "cell8", "urdf_cell", "parking")
 """Names of the built-in cells (:func:`load_example`)."""
 
 URDF_EXAMPLES: tuple[str, ...] = ("urdf_cell",)
@@ -472,4 +472,6 @@ def load_example(name: str) -> Cell:
     if name not in known:
         raise ValidationError(f"unknown example cell {name!r} (known: {', '.join(known)})")
     data = tomllib.loads(_example_text(name))
-    return cell_from_dict(data, filename=f"{name}.toml")
+    # a built-in cell may name files of its own next to it (the parking cell)
+    with resources.as_file(resources.files("workcell.examples")) as folder:
+        return cell_from_dict(data, filename=f"{name}.toml", base_dir=Path(folder))
