@@ -458,8 +458,10 @@ def _example_text(name: str) -> str:
 
 
 def load_example(name: str) -> Cell:
-    """The built-in cell ``name``: ``"supersigma"``, ``"scara4"``, ``"cell8"`` or
-    ``"urdf_cell"`` (two UR5 and a Panda from URDF: the ``urdf`` extra).
+    """The built-in cell ``name``: ``"supersigma"``, ``"scara4"``, ``"cell8"``,
+    ``"urdf_cell"`` (two UR5 and a Panda from URDF: the ``urdf`` extra) or
+    ``"parking"`` (S2.6: an arm parked in another's way, and the OMPL detour
+    around it; :mod:`workcell.detours`).
 
     Read from the package's data, so it works from an installed wheel.
 
