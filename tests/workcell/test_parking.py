@@ -87,6 +87,7 @@ def test_the_tree_plan_takes_a_detour_and_beats_every_plan_without(
     without = compile_cell(compiled.cell, options=replace(compiled.options, detours=False))
     other = _tree(without).schedule
     assert other is not None and not np.any(other.blocking > 0)
+    assert plan_detours(without, other) == {}
     assert validate(without, other) == pytest.approx(c.makespan_without)
     press2 = without.problem.task_names.index("press2")
     deliver1 = without.problem.task_names.index("deliver1")
