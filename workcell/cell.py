@@ -73,7 +73,7 @@ PlanWith = Literal["nominal", "worst"]
 Park = Literal["home", "last"]
 Releases = Literal["expected", "sample", "none"]
 
-EXAMPLES: tuple[str, ...] = ("supersigma", "scara4", "cell8", "urdf_cell")
+EXAMPLES: tuple[str, ...] = ("supersigma", "scara4", "cell8", "urdf_cell", "parking")
 """Names of the built-in cells (:func:`load_example`)."""
 
 URDF_EXAMPLES: tuple[str, ...] = ("urdf_cell",)
@@ -458,8 +458,10 @@ def _example_text(name: str) -> str:
 
 
 def load_example(name: str) -> Cell:
-    """The built-in cell ``name``: ``"supersigma"``, ``"scara4"``, ``"cell8"`` or
-    ``"urdf_cell"`` (two UR5 and a Panda from URDF: the ``urdf`` extra).
+    """The built-in cell ``name``: ``"supersigma"``, ``"scara4"``, ``"cell8"``,
+    ``"urdf_cell"`` (two UR5 and a Panda from URDF: the ``urdf`` extra) or
+    ``"parking"`` (S2.6: an arm parked in another's way, and the OMPL detour
+    around it; :mod:`workcell.detours`).
 
     Read from the package's data, so it works from an installed wheel.
 
@@ -472,4 +474,6 @@ def load_example(name: str) -> Cell:
     if name not in known:
         raise ValidationError(f"unknown example cell {name!r} (known: {', '.join(known)})")
     data = tomllib.loads(_example_text(name))
-    return cell_from_dict(data, filename=f"{name}.toml")
+    # a built-in cell may name files of its own next to it (the parking cell)
+    with resources.as_file(resources.files("workcell.examples")) as folder:
+        return cell_from_dict(data, filename=f"{name}.toml", base_dir=Path(folder))
