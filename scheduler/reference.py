@@ -18,7 +18,8 @@ narrower questions exactly instead:
   linear-in-domain constraint). Arms are a ``NoOverlap`` and, with setups, a
   ``Circuit`` whose arcs carry the travel time; a redundant ``Cumulative`` of
   capacity (number of arms) helps the bound. Resources only one arm uses are
-  left out (:func:`scheduler.cpsat.shared_resources`).
+  left out, and so are resources dominated by another
+  (:func:`scheduler.cpsat.essential_resources`).
   Schedules without waits are schedules of the problem, so this optimum is an
   *upper reference* of the true optimum (waits allowed); it is the true
   optimum of the same problem solved with ``waits=False``.
@@ -61,7 +62,8 @@ import numpy as np
 
 from multiarm.errors import ScheduleError, UsageError
 from scheduler.bounds import lower_bound
-from scheduler.cpsat import _rounders, _time_values, integer_scale, shared_resources
+from scheduler.cpsat import _rounders, _time_values, essential_resources, integer_scale
+from scheduler.overlap import overlap_bound
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule, validate
 from scheduler.search import Evaluator, priority_order
@@ -107,6 +109,11 @@ class Reference:
         CP-SAT's deterministic time of the no-wait solve.
     pairs : int
         Pairs of modes constrained by a difference domain.
+    zone_free_bound : float
+        The zone-free relaxation's bound (seconds; 0 when not run).
+    overlap_bound : float
+        The overlap relaxation's bound (:func:`scheduler.overlap.overlap_bound`,
+        seconds; 0 when not run or skipped).
     """
 
     status: str
@@ -121,6 +128,8 @@ class Reference:
     build_seconds: float
     deterministic_time: float
     pairs: int
+    zone_free_bound: float = 0.0
+    overlap_bound: float = 0.0
 
     @property
     def gap(self) -> float:
@@ -290,7 +299,7 @@ def nowait_model(
             arcs.append((0, 0, mdl.new_bool_var("")))
             arc_lits[a][(-1, -1)] = arcs[-1][2]
             mdl.add_circuit(arcs)
-    shared = shared_resources(p)
+    shared = essential_resources(p)
     if not zones:
         shared = frozenset(r for r in shared if r >= 2 * p.n_zones)  # tools only
     wins = _resource_windows(p, shared)
@@ -656,16 +665,26 @@ def solve_reference(
     else:
         nw_bound = 0.0
     bound = lb
+    zf = ob = 0.0
     if bounding:
         zf, _ = _bound_of(
             p, horizon, 1 / scale, False, bound_time, seed, workers, max_deterministic_time
         )
-        bound = max(lb, zf)
+        ob, _ = overlap_bound(
+            p,
+            bound_time,
+            seed,
+            unit=min(0.01, 1 / scale),
+            workers=workers,
+            max_deterministic_time=max_deterministic_time,
+            horizon=horizon,
+        )
+        bound = max(lb, zf, ob)
     nw_bound = max(nw_bound, bound)
     if not ok:
         return Reference(
             "unknown", None, math.inf, nw_bound, bound, 1 / scale, v["exact"], False, seconds,
-            build, dtime, v["pairs"],
+            build, dtime, v["pairs"], zf, ob,
         )  # fmt: skip
     T = p.n_tasks
     modes = np.array(
@@ -685,7 +704,7 @@ def solve_reference(
     if sched is None:
         return Reference(
             "unknown", None, math.inf, nw_bound, bound, 1 / scale, v["exact"], False, seconds,
-            build, dtime, v["pairs"],
+            build, dtime, v["pairs"], zf, ob,
         )  # fmt: skip
     mk = validate(p, sched)
     if v["exact"]:
@@ -708,4 +727,6 @@ def solve_reference(
         build,
         dtime,
         v["pairs"],
+        zf,
+        ob,
     )
