@@ -124,7 +124,9 @@ def shared_resources(problem: Problem) -> frozenset[int]:
     return frozenset(r for r, arms in arms_of.items() if len(arms) > 1)
 
 
-def resource_windows(problem: Problem, resources: frozenset[int]) -> dict[int, dict[int, list[Any]]]:
+def resource_windows(
+    problem: Problem, resources: frozenset[int]
+) -> dict[int, dict[int, list[Any]]]:
     """Per resource of ``resources``: mode -> its merged ``(start, end)`` windows
     (offsets; a tool: the whole mode)."""
     use: dict[int, dict[int, list[Any]]] = {}
