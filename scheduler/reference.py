@@ -68,7 +68,14 @@ from scheduler.problem import Problem
 from scheduler.schedule import Schedule, validate
 from scheduler.search import Evaluator, priority_order
 
-__all__ = ["LARGE", "Reference", "nowait_model", "relaxation_bound", "solve_reference"]
+__all__ = [
+    "LARGE",
+    "Reference",
+    "best_bound",
+    "nowait_model",
+    "relaxation_bound",
+    "solve_reference",
+]
 
 LARGE = 20_000
 """Pairs of modes beyond which CP-SAT's presolve is skipped (``cell8``: 95,131;
@@ -574,6 +581,43 @@ def relaxation_bound(
     horizon, _ = _horizon(p, None)
     b, _ = _bound_of(p, horizon, unit, False, time_limit, seed, workers, max_deterministic_time)
     return max(lb, b)
+
+
+def best_bound(
+    problem: Problem,
+    time_limit: float | None = 10.0,
+    seed: int = 0,
+    *,
+    workers: int = 2,
+    max_deterministic_time: float | None = None,
+) -> float:
+    """The best lower bound of the makespan we can prove (seconds).
+
+    The largest of :func:`scheduler.bounds.lower_bound` (no solver),
+    :func:`relaxation_bound` (zone-free) and
+    :func:`scheduler.overlap.overlap_bound` (pair spans), each relaxation
+    given ``time_limit`` seconds (or ``max_deterministic_time``) of CP-SAT.
+    All three are bounds of the true problem: waits at borders and detours
+    included.
+
+    Examples
+    --------
+    >>> from scheduler.generate import random_problem
+    >>> p = random_problem(2, 6, 2, 1, seed=1)
+    >>> best_bound(p, 2, workers=1) >= lower_bound(p)
+    True
+    """
+    p = problem
+    lb = lower_bound(p)
+    if p.n_tasks == 0:
+        return 0.0
+    zf = relaxation_bound(
+        p, time_limit, seed, workers=workers, max_deterministic_time=max_deterministic_time
+    )
+    ob, _ = overlap_bound(
+        p, time_limit, seed, workers=workers, max_deterministic_time=max_deterministic_time
+    )
+    return max(lb, zf, ob)
 
 
 def solve_reference(
