@@ -36,8 +36,8 @@ bounds the overlap when one task starts ``delta`` after the other
 (:class:`PairOverlap`): the one ahead has then progressed at most ``delta``.
 
 :func:`overlap_bound` adds the constraint above for every pair of modes to
-the zone-free relaxation (arms, travel, releases, precedence; tasks may take
-longer than their modes), solved by CP-SAT with times rounded down
+the zone-free relaxation (arms, travel, releases, precedence, tools; tasks
+may take longer than their modes), solved by CP-SAT with times rounded down
 (``floor``, which keeps every constraint of a real schedule), so that its
 bound is a lower bound of the makespan of the true problem.
 
@@ -380,6 +380,14 @@ def overlap_model(
                     mdl.add(S[t2] >= E[t] + fl(p.setup_time(a, t, t2))).only_enforce_if(lit)
             arcs.append((0, 0, mdl.new_bool_var("")))
             mdl.add_circuit(arcs)
+    # tools are held from start to end, waits included: a no-overlap each
+    tools: dict[int, list[Any]] = {}
+    for m in range(p.n_modes):
+        for k in p.mode_tools[m]:
+            tools.setdefault(int(k), []).append(iv[m])
+    for ivs in tools.values():
+        if len(ivs) > 1:
+            mdl.add_no_overlap(ivs)
     pairs = add_pair_spans(mdl, p, S, E, X, caps, scale, H, profiles=profiles, n_levels=n_levels)
     mdl.add_cumulative(master, [1] * T, p.n_arms)
     mk = mdl.new_int_var(0, H, "makespan")
