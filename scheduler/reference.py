@@ -630,15 +630,18 @@ def solve_reference(
     max_deterministic_time: float | None = None,
     unit: float | None = None,
     bound_time: float | None = 10.0,
+    bound_deterministic_time: float | None = None,
     tolerance: float = 0.01,
     log: bool = False,
 ) -> Reference:
     """Solve the no-wait model and bound the true problem (module docstring).
 
-    Three CP-SAT runs: the no-wait model rounded outwards (its schedule), the
+    Four CP-SAT runs: the no-wait model rounded outwards (its schedule), the
     same rounded inwards (a bound of the no-wait optimum, when the unit is
-    not exact; ``bound_time`` seconds) and the zone-free relaxation (a bound
-    of the true problem; ``bound_time`` seconds).
+    not exact), the zone-free relaxation and the overlap relaxation
+    (:func:`scheduler.overlap.overlap_bound`; bounds of the true problem),
+    the last three ``bound_time`` seconds each. Without an exact unit the
+    relaxations round inwards at 10 ms (zone-free) and 50 ms (overlap).
 
     Parameters
     ----------
@@ -659,6 +662,9 @@ def solve_reference(
     bound_time : float or None
         Seconds for each bounding run (0: none; the bounds are then
         :func:`scheduler.bounds.lower_bound`).
+    bound_deterministic_time : float or None
+        CP-SAT's work limit for each bounding run (the bounds then depend
+        little on the machine's load).
     tolerance : float
         Seconds: with a unit that does not divide the data, the no-wait
         optimum counts as proven when the outward model is solved to
@@ -700,27 +706,25 @@ def solve_reference(
     ok = code in (cp_model.OPTIMAL, cp_model.FEASIBLE)
     lb = lower_bound(p)
     bounding = bound_time is None or bound_time > 0
+    bdt = max_deterministic_time if bound_deterministic_time is None else bound_deterministic_time
     if v["exact"]:
         nw_bound = float(solver.best_objective_bound) / scale if ok else 0.0
     elif bounding:
-        nw_bound, _ = _bound_of(
-            p, horizon, 1 / scale, True, bound_time, seed, workers, max_deterministic_time
-        )
+        nw_bound, _ = _bound_of(p, horizon, 1 / scale, True, bound_time, seed, workers, bdt)
     else:
         nw_bound = 0.0
     bound = lb
     zf = ob = 0.0
     if bounding:
-        zf, _ = _bound_of(
-            p, horizon, 1 / scale, False, bound_time, seed, workers, max_deterministic_time
-        )
+        zf_unit = 1 / scale if v["exact"] else max(1 / scale, 0.01)
+        zf, _ = _bound_of(p, horizon, zf_unit, False, bound_time, seed, workers, bdt)
         ob, _ = overlap_bound(
             p,
             bound_time,
             seed,
-            unit=min(0.01, 1 / scale),
+            unit=1 / scale if v["exact"] else max(1 / scale, 0.05),
             workers=workers,
-            max_deterministic_time=max_deterministic_time,
+            max_deterministic_time=bdt,
             horizon=horizon,
         )
         bound = max(lb, zf, ob)

@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from scheduler import Model, Problem, Window, lower_bound, solve, validate
+from scheduler import CpSatOptions, Model, Problem, Window, lower_bound, solve, validate
 from scheduler.cpsat import build_model, essential_resources, shared_resources
 from scheduler.generate import random_problem
 from scheduler.overlap import overlap_bound, overlap_caps
@@ -122,8 +122,6 @@ def _small(seed: int) -> Problem:
 
 @pytest.mark.parametrize("seed", range(6))
 def test_overlap_bound_below_the_optimum(seed: int) -> None:
-    from scheduler import CpSatOptions
-
     p = _small(seed)
     opt = solve(p, "cpsat", time_limit=None, options=CpSatOptions(workers=1))
     assert opt.status.value == "optimal"
@@ -144,7 +142,8 @@ def test_every_schedule_keeps_the_pair_spans() -> None:
         caps = overlap_caps(p, step=0.1)
         assert caps is not None
         for solver in ("greedy", "cpsat"):
-            r = solve(p, solver, time_limit=None, seed=seed)
+            opts = CpSatOptions(workers=1) if solver == "cpsat" else None
+            r = solve(p, solver, time_limit=None, seed=seed, options=opts)
             assert r.schedule is not None
             s = r.schedule
             ends = s.start + np.array(
