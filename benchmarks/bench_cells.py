@@ -309,7 +309,9 @@ def main(argv: list[str] | None = None) -> None:
         " bounds the no-wait optimum, the best bound bounds the true problem (waits and"
         " detours allowed); gaps are to the best bound (docs/scheduler.md, 'The exact"
         " reference on compiled cells'). No optimum of the true problem is proven: see"
-        " docs/scheduler.md for what each bound keeps of the problem. ref dtime is CP-SAT's"
+        " docs/scheduler.md for what each bound keeps of the problem. An overlap bound '-'"
+        " means none: skipped (more than 20,000 pairs of modes sharing a resource) or no"
+        " solution of the relaxation within its limit. ref dtime is CP-SAT's"
         " deterministic time of the no-wait solve (repeatable, unlike the wall time).\n"
     )
     both = pd.concat([speed, sched, refs], ignore_index=True)
