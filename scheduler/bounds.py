@@ -92,7 +92,42 @@ def heads_and_tails(p: Problem) -> tuple[FloatArray, FloatArray, FloatArray]:
     return est, mind, tail
 
 
-def _load_lp(p: Problem, extra: FloatArray) -> float:
+def _resource_rows(
+    p: Problem, est: FloatArray, tail: FloatArray
+) -> tuple[list[int], list[int], list[float], list[float]]:
+    """Per resource, its row of the load LP: (row, mode, length) entries and
+    the room ``-(head + tail)``: every mode's use of the resource (merged
+    windows; a tool: the whole mode) lies in ``[head, C - tail]``, the
+    smallest head and tail over the modes that use it."""
+    shapes = p.shapes
+    rows: list[int] = []
+    cols: list[int] = []
+    vals: list[float] = []
+    room: list[float] = []
+    per_res: dict[int, list[tuple[int, float, float, float]]] = {}
+    for m in range(p.n_modes):
+        sh = shapes[m]
+        t = int(p.mode_task[m])
+        parts: dict[int, list[tuple[float, float]]] = {}
+        for r, s, e in (*sh.exclusive, *sh.moves):
+            parts.setdefault(r, []).append((s, e))
+        for r in sh.tools:
+            parts.setdefault(r, []).append((0.0, sh.duration))
+        for r, ivs in parts.items():
+            length = sum(e - s for s, e in ivs)
+            head = float(est[t]) + min(s for s, _ in ivs)
+            after = sh.duration - max(e for _, e in ivs) + float(tail[t])
+            per_res.setdefault(r, []).append((m, length, head, after))
+    for i, uses in enumerate(per_res.values()):
+        for m, length, _, _ in uses:
+            rows.append(i)
+            cols.append(m)
+            vals.append(length)
+        room.append(-(min(u[2] for u in uses) + min(u[3] for u in uses)))
+    return rows, cols, vals, room
+
+
+def _load_lp(p: Problem, extra: FloatArray, est: FloatArray, tail: FloatArray) -> float:
     from scipy.optimize import linprog
     from scipy.sparse import coo_matrix
 
@@ -102,14 +137,18 @@ def _load_lp(p: Problem, extra: FloatArray) -> float:
     c = np.zeros(M + 1)
     c[M] = 1.0
     eq = coo_matrix((np.ones(M), (p.mode_task, np.arange(M))), shape=(T, M + 1))
-    rows = np.concatenate([p.mode_arm, np.arange(A)])
-    cols = np.concatenate([np.arange(M), np.full(A, M)])
-    vals = np.concatenate([cost, -np.ones(A)])
-    ub = coo_matrix((vals, (rows, cols)), shape=(A, M + 1))
+    rr, rc, rv, room = _resource_rows(p, est, tail)
+    R = len(room)
+    rows = np.concatenate(
+        [p.mode_arm, np.arange(A), A + np.asarray(rr, dtype=int), A + np.arange(R)]
+    )
+    cols = np.concatenate([np.arange(M), np.full(A, M), np.asarray(rc, dtype=int), np.full(R, M)])
+    vals = np.concatenate([cost, -np.ones(A), np.asarray(rv, dtype=float), -np.ones(R)])
+    ub = coo_matrix((vals, (rows, cols)), shape=(A + R, M + 1))
     res = linprog(
         c,
         A_ub=ub.tocsr(),
-        b_ub=-p.arm_available,
+        b_ub=np.concatenate([-p.arm_available, np.asarray(room, dtype=float)]),
         A_eq=eq.tocsr(),
         b_eq=np.ones(T),
         bounds=[(0, 1)] * M + [(0, None)],
@@ -191,7 +230,7 @@ def lower_bounds(problem: Problem) -> LowerBounds:
     est, mind, tail = heads_and_tails(p)
     cp = float(np.max(est + mind + tail))
     extra = _min_incoming_setup(p)
-    load = _load_lp(p, extra)
+    load = _load_lp(p, extra, est, tail)
     cap = _capability(p, extra)
     res, name = _resources(p, est, tail)
     value = max(cp, load, cap, res, 0.0)

@@ -54,7 +54,14 @@ from scheduler.result import Result, SolveStatus
 from scheduler.schedule import Schedule, ScheduleError, validate
 from scheduler.start import begin
 
-__all__ = ["build_model", "integer_scale", "shared_resources", "solve_cpsat"]
+__all__ = [
+    "build_model",
+    "essential_resources",
+    "integer_scale",
+    "resource_windows",
+    "shared_resources",
+    "solve_cpsat",
+]
 
 
 def _integral(values: Any, scale: float) -> bool:
@@ -117,6 +124,75 @@ def shared_resources(problem: Problem) -> frozenset[int]:
     return frozenset(r for r, arms in arms_of.items() if len(arms) > 1)
 
 
+def resource_windows(
+    problem: Problem, resources: frozenset[int]
+) -> dict[int, dict[int, list[Any]]]:
+    """Per resource of ``resources``: mode -> its merged ``(start, end)`` windows
+    (offsets; a tool: the whole mode)."""
+    use: dict[int, dict[int, list[Any]]] = {}
+    for m, sh in enumerate(problem.shapes.modes):
+        for r, s, e in (*sh.exclusive, *sh.moves):
+            if r in resources:
+                use.setdefault(r, {}).setdefault(m, []).append((s, e))
+        for r in sh.tools:
+            if r in resources:
+                use.setdefault(r, {}).setdefault(m, []).append((0.0, sh.duration))
+    return use
+
+
+def essential_resources(problem: Problem) -> frozenset[int]:
+    """The shared resources (:func:`shared_resources`) without the dominated ones.
+
+    A resource ``r`` is *dominated* by another ``q`` when every mode that
+    uses ``r`` also uses ``q``, each of its windows in ``r`` lying inside one
+    of its windows in ``q`` (offsets), and ``q`` excludes at least as much as
+    ``r`` while waiting (``q`` an exclusive zone or tool, or both movements
+    of shared zones). Then, waits included, each use of ``r`` lies inside a
+    use of ``q`` by the same task (a window ``[s, e)`` inside ``[s', e')``
+    is shifted by no more waits at its start and no fewer at its end), so
+    two tasks that meet in ``r`` meet in ``q``: leaving ``r`` out changes no
+    constraint. On the compiled cells the space grid's blocks that one arm
+    sweeps at once dominate each other: ``supersigma`` keeps 26 of 153
+    shared resources, ``scara4`` 16 of 53. An exclusive zone some arm starts
+    in is always kept (its start interval is not a window).
+
+    Returns
+    -------
+    frozenset of int
+    """
+    p = problem
+    shared = shared_resources(p)
+    use = resource_windows(p, shared)
+    Z = p.n_zones
+    starts = {int(z) for zs in p.arm_start_zones for z in zs if p.zone_exclusive[z]}
+
+    def kind(r: int) -> int:  # 0: presence (exclusive zone, tool), 1: movement
+        return 1 if Z <= r < 2 * Z else 0
+
+    def inside(ws: list[Any], outer: list[Any]) -> bool:
+        return all(any(a2 <= a and b <= b2 for a2, b2 in outer) for a, b in ws)
+
+    def dominated(r: int, q: int) -> bool:
+        u, uq = use[r], use[q]
+        if kind(q) > kind(r) or len(uq) < len(u):
+            return False
+        return all(m in uq and inside(ws, uq[m]) for m, ws in u.items())
+
+    dropped: set[int] = set()
+    order = sorted(use)
+    for r in order:
+        if r in starts:
+            continue
+        for q in order:
+            if q == r or q in dropped or not dominated(r, q):
+                continue
+            if r < q and dominated(q, r):  # the same windows: keep the first
+                continue
+            dropped.add(r)
+            break
+    return frozenset(r for r in shared if r not in dropped)
+
+
 def _rounders(scale: float, exact: bool, rounding: str) -> tuple[Any, Any]:
     """(lo, hi): the roundings of starts and of ends/lengths/gaps to model units."""
 
@@ -144,6 +220,7 @@ def build_model(
     pad: Any = None,
     unit: float | None = None,
     rounding: str = "out",
+    resources: frozenset[int] | None = None,
 ) -> tuple[Any, dict[str, Any]]:
     """The CP-SAT model and its variables (see the module docstring).
 
@@ -168,6 +245,9 @@ def build_model(
         is a valid schedule; ``"in"`` rounds the other way and drops what
         rounds to nothing, so that every valid schedule maps to a solution
         and the model's bound times the unit bounds the problem.
+    resources : frozenset of int or None
+        The resources to constrain (None: :func:`essential_resources`, which
+        changes no constraint; a subset gives a relaxation).
 
     Returns
     -------
@@ -187,7 +267,7 @@ def build_model(
         exact = allv is not None and _integral(allv, scale)
     lo, hi = _rounders(scale, exact, rounding)
     relax = rounding == "in" and not exact
-    shared = shared_resources(p)
+    shared = essential_resources(p) if resources is None else resources
     shapes = p.shapes
     T = p.n_tasks
     max_refs = max((len(sh.borders) for sh in shapes.modes), default=0)

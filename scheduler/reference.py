@@ -18,7 +18,8 @@ narrower questions exactly instead:
   linear-in-domain constraint). Arms are a ``NoOverlap`` and, with setups, a
   ``Circuit`` whose arcs carry the travel time; a redundant ``Cumulative`` of
   capacity (number of arms) helps the bound. Resources only one arm uses are
-  left out (:func:`scheduler.cpsat.shared_resources`).
+  left out, and so are resources dominated by another
+  (:func:`scheduler.cpsat.essential_resources`).
   Schedules without waits are schedules of the problem, so this optimum is an
   *upper reference* of the true optimum (waits allowed); it is the true
   optimum of the same problem solved with ``waits=False``.
@@ -61,12 +62,20 @@ import numpy as np
 
 from multiarm.errors import ScheduleError, UsageError
 from scheduler.bounds import lower_bound
-from scheduler.cpsat import _rounders, _time_values, integer_scale, shared_resources
+from scheduler.cpsat import _rounders, _time_values, essential_resources, integer_scale
+from scheduler.overlap import overlap_bound
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule, validate
 from scheduler.search import Evaluator, priority_order
 
-__all__ = ["LARGE", "Reference", "nowait_model", "relaxation_bound", "solve_reference"]
+__all__ = [
+    "LARGE",
+    "Reference",
+    "best_bound",
+    "nowait_model",
+    "relaxation_bound",
+    "solve_reference",
+]
 
 LARGE = 20_000
 """Pairs of modes beyond which CP-SAT's presolve is skipped (``cell8``: 95,131;
@@ -107,6 +116,11 @@ class Reference:
         CP-SAT's deterministic time of the no-wait solve.
     pairs : int
         Pairs of modes constrained by a difference domain.
+    zone_free_bound : float
+        The zone-free relaxation's bound (seconds; 0 when not run).
+    overlap_bound : float
+        The overlap relaxation's bound (:func:`scheduler.overlap.overlap_bound`,
+        seconds; 0 when not run or skipped).
     """
 
     status: str
@@ -121,6 +135,8 @@ class Reference:
     build_seconds: float
     deterministic_time: float
     pairs: int
+    zone_free_bound: float = 0.0
+    overlap_bound: float = 0.0
 
     @property
     def gap(self) -> float:
@@ -290,7 +306,7 @@ def nowait_model(
             arcs.append((0, 0, mdl.new_bool_var("")))
             arc_lits[a][(-1, -1)] = arcs[-1][2]
             mdl.add_circuit(arcs)
-    shared = shared_resources(p)
+    shared = essential_resources(p)
     if not zones:
         shared = frozenset(r for r in shared if r >= 2 * p.n_zones)  # tools only
     wins = _resource_windows(p, shared)
@@ -567,6 +583,43 @@ def relaxation_bound(
     return max(lb, b)
 
 
+def best_bound(
+    problem: Problem,
+    time_limit: float | None = 10.0,
+    seed: int = 0,
+    *,
+    workers: int = 2,
+    max_deterministic_time: float | None = None,
+) -> float:
+    """The best lower bound of the makespan we can prove (seconds).
+
+    The largest of :func:`scheduler.bounds.lower_bound` (no solver),
+    :func:`relaxation_bound` (zone-free) and
+    :func:`scheduler.overlap.overlap_bound` (pair spans), each relaxation
+    given ``time_limit`` seconds (or ``max_deterministic_time``) of CP-SAT.
+    All three are bounds of the true problem: waits at borders and detours
+    included.
+
+    Examples
+    --------
+    >>> from scheduler.generate import random_problem
+    >>> p = random_problem(2, 6, 2, 1, seed=1)
+    >>> best_bound(p, 2, workers=1) >= lower_bound(p)
+    True
+    """
+    p = problem
+    lb = lower_bound(p)
+    if p.n_tasks == 0:
+        return 0.0
+    zf = relaxation_bound(
+        p, time_limit, seed, workers=workers, max_deterministic_time=max_deterministic_time
+    )
+    ob, _ = overlap_bound(
+        p, time_limit, seed, workers=workers, max_deterministic_time=max_deterministic_time
+    )
+    return max(lb, zf, ob)
+
+
 def solve_reference(
     problem: Problem,
     time_limit: float | None = 60.0,
@@ -577,15 +630,18 @@ def solve_reference(
     max_deterministic_time: float | None = None,
     unit: float | None = None,
     bound_time: float | None = 10.0,
+    bound_deterministic_time: float | None = None,
     tolerance: float = 0.01,
     log: bool = False,
 ) -> Reference:
     """Solve the no-wait model and bound the true problem (module docstring).
 
-    Three CP-SAT runs: the no-wait model rounded outwards (its schedule), the
+    Four CP-SAT runs: the no-wait model rounded outwards (its schedule), the
     same rounded inwards (a bound of the no-wait optimum, when the unit is
-    not exact; ``bound_time`` seconds) and the zone-free relaxation (a bound
-    of the true problem; ``bound_time`` seconds).
+    not exact), the zone-free relaxation and the overlap relaxation
+    (:func:`scheduler.overlap.overlap_bound`; bounds of the true problem),
+    the last three ``bound_time`` seconds each. Without an exact unit the
+    relaxations round inwards at 10 ms (zone-free) and 50 ms (overlap).
 
     Parameters
     ----------
@@ -606,6 +662,9 @@ def solve_reference(
     bound_time : float or None
         Seconds for each bounding run (0: none; the bounds are then
         :func:`scheduler.bounds.lower_bound`).
+    bound_deterministic_time : float or None
+        CP-SAT's work limit for each bounding run (the bounds then depend
+        little on the machine's load).
     tolerance : float
         Seconds: with a unit that does not divide the data, the no-wait
         optimum counts as proven when the outward model is solved to
@@ -647,25 +706,33 @@ def solve_reference(
     ok = code in (cp_model.OPTIMAL, cp_model.FEASIBLE)
     lb = lower_bound(p)
     bounding = bound_time is None or bound_time > 0
+    bdt = max_deterministic_time if bound_deterministic_time is None else bound_deterministic_time
     if v["exact"]:
         nw_bound = float(solver.best_objective_bound) / scale if ok else 0.0
     elif bounding:
-        nw_bound, _ = _bound_of(
-            p, horizon, 1 / scale, True, bound_time, seed, workers, max_deterministic_time
-        )
+        nw_bound, _ = _bound_of(p, horizon, 1 / scale, True, bound_time, seed, workers, bdt)
     else:
         nw_bound = 0.0
     bound = lb
+    zf = ob = 0.0
     if bounding:
-        zf, _ = _bound_of(
-            p, horizon, 1 / scale, False, bound_time, seed, workers, max_deterministic_time
+        zf_unit = 1 / scale if v["exact"] else max(1 / scale, 0.01)
+        zf, _ = _bound_of(p, horizon, zf_unit, False, bound_time, seed, workers, bdt)
+        ob, _ = overlap_bound(
+            p,
+            bound_time,
+            seed,
+            unit=1 / scale if v["exact"] else max(1 / scale, 0.05),
+            workers=workers,
+            max_deterministic_time=bdt,
+            horizon=horizon,
         )
-        bound = max(lb, zf)
+        bound = max(lb, zf, ob)
     nw_bound = max(nw_bound, bound)
     if not ok:
         return Reference(
             "unknown", None, math.inf, nw_bound, bound, 1 / scale, v["exact"], False, seconds,
-            build, dtime, v["pairs"],
+            build, dtime, v["pairs"], zf, ob,
         )  # fmt: skip
     T = p.n_tasks
     modes = np.array(
@@ -685,7 +752,7 @@ def solve_reference(
     if sched is None:
         return Reference(
             "unknown", None, math.inf, nw_bound, bound, 1 / scale, v["exact"], False, seconds,
-            build, dtime, v["pairs"],
+            build, dtime, v["pairs"], zf, ob,
         )  # fmt: skip
     mk = validate(p, sched)
     if v["exact"]:
@@ -708,4 +775,6 @@ def solve_reference(
         build,
         dtime,
         v["pairs"],
+        zf,
+        ob,
     )

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from scheduler import Model, Window, lower_bounds, solve
+from scheduler import Model, Window, lower_bounds, solve, validate
 from scheduler.generate import random_problem
 
 
@@ -72,3 +72,21 @@ def test_bound_never_exceeds_the_optimum(seed: int, arms: int, tasks: int) -> No
     r = solve(p, "cpsat", time_limit=None, workers=1)
     assert r.status.value == "optimal"
     assert lower_bounds(p).value <= r.objective + 1e-6
+
+
+def test_the_load_lp_counts_each_zone_as_a_machine() -> None:
+    """Modes that hold one exclusive zone for a different share of their time:
+    the arms alone allow 6 s, the zone's row of the LP about 7.2 s, and every
+    schedule is at least that long."""
+    m = Model("zone row")
+    a, b, z = m.add_arm("a"), m.add_arm("b"), m.add_zone("z")
+    for i in range(4):
+        t = m.add_task(f"t{i}")
+        m.add_mode(t, a, 3.0, windows=[Window(z, 0.0, 3.0)])
+        m.add_mode(t, b, 3.0, windows=[Window(z, 0.0, 1.0)])
+    p = m.build()
+    parts = lower_bounds(p)
+    # X tasks on a: max(3 X, 3 (4 - X), 3 X + (4 - X)) is least at X = 1.6
+    assert parts.load == pytest.approx(36 / 5, abs=1e-6)
+    assert parts.value >= parts.load
+    assert validate(p, solve(p, "tree", time_limit=None).schedule) >= parts.value - 1e-9
