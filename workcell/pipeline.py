@@ -323,8 +323,15 @@ def load_faults(faults: FaultsLike, cell: Cell | CompiledCell | None = None) -> 
     return as_plan(faults)
 
 
-def check_out_dir(out: str | PathLike[str]) -> Path:
-    """``out`` as an existing, writable directory (created if missing).
+def check_out_dir(out: str | PathLike[str], *, create: bool = True) -> Path:
+    """``out`` as a writable directory, checked before any long work.
+
+    Parameters
+    ----------
+    out : str or path-like
+    create : bool
+        Create it (and its parents) when missing; False: only check that it
+        could be created (its nearest existing ancestor is a writable directory).
 
     Raises
     ------
@@ -334,6 +341,17 @@ def check_out_dir(out: str | PathLike[str]) -> Path:
     path = Path(out)
     if path.exists() and not path.is_dir():
         raise UsageError(f"{str(path)!r} is not a directory")
+    if not create and not path.exists():
+        parent = path.parent
+        while not parent.exists() and parent != parent.parent:
+            parent = parent.parent
+        if not parent.is_dir():
+            raise UsageError(f"cannot create directory {str(path)!r}: {str(parent)!r} is a file")
+        if not os.access(parent, os.W_OK):
+            raise UsageError(
+                f"cannot create directory {str(path)!r}: {str(parent)!r} is not writable"
+            )
+        return path
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -516,7 +534,7 @@ def run_solved(
     """
     _check_frames(frames)
     plan = load_faults(faults, solved.compiled)
-    where = check_out_dir(out) if out is not None else None
+    where = check_out_dir(out, create=False) if out is not None else None
     if progress is not None:
         progress("simulate", f"{len(plan)} faults, medium {medium!r}")
     sim = simulate(
@@ -617,7 +635,7 @@ def run_cell(
     _check_frames(frames)
     plan = load_faults(faults, cell)  # the one place faults are read and checked: before compiling
     if out is not None:
-        check_out_dir(out)
+        check_out_dir(out, create=False)
     solved = solve_cell(
         cell,
         solver=solver,

@@ -44,7 +44,7 @@ SOLVERS: tuple[SolverName, ...] = ("greedy", "tree", "cpsat")
 STEPS_PER_CELL = 8
 """compile, three solves, then simulate and write twice."""
 SECONDS_PER_CELL = 10.0
-"""A rough cost of one cell besides its solves: compile, two runs, plots (measured: 4-15 s)."""
+"""A rough allowance for one cell besides its solves (compile, two runs, their plots), seconds."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -2,20 +2,15 @@
 
 Exit statuses of ``multiarm`` (docs/cli.md has the table):
 
-======  =====================================================================
-status  meaning
-======  =====================================================================
-0       done; for ``check``, also a file with warnings only
-1       an error, printed as one line ``error: ...`` (bad input named by its
-        file, field or option; no schedule found; a run stopped by the
-        safety monitor)
-2       the command line itself is malformed (argparse: unknown option,
-        missing argument, a value of the wrong type)
-3       the work ran but did not all succeed: tasks failed in a simulated
-        run (unless ``--allow-failures``), findings of a campaign, failed
-        runs of a sweep
-130     interrupted (Ctrl-C): one line on stderr, nothing half-written
-======  =====================================================================
+* 0 (:data:`EXIT_OK`): done; for ``check``, also a file with warnings only;
+* 1 (:data:`EXIT_ERROR`): an error, printed as one line ``error: ...`` (bad
+  input named by its file, field or option; no schedule found; a run stopped
+  by the safety monitor);
+* 2 (:data:`EXIT_USAGE`): the command line itself is malformed (argparse);
+* 3 (:data:`EXIT_FAILURES`): the work ran but did not all succeed: tasks
+  failed in a simulated run (unless ``--allow-failures``), findings of a
+  campaign, failed runs of a sweep;
+* 130 (:data:`EXIT_INTERRUPTED`): Ctrl-C, one line on stderr.
 
 Progress goes to stderr: a bar on a terminal, and when stderr is not a
 terminal (piped, a log file, CI) one line per step with the time elapsed,
