@@ -84,10 +84,26 @@ def test_the_default_solve_is_reproducible_and_shows_its_work_limit(
     for k in range(2):
         argv = ["simulate", "scara4", "--time-limit", "1", "--out", str(tmp_path / str(k))]
         assert main(argv) == 0
-        err = capsys.readouterr().err
-        assert "solve (tree, 400 evaluations, time limit 1 s)" in err
+        captured = capsys.readouterr()
+        assert "solve (tree, 400 evaluations, time limit 1 s)" in captured.err
+        assert "note: the clock" not in captured.out
+        # the work limit ended the search (a clock would stop at a count that varies)
+        n = re.search(r"(\d+) evaluations", captured.out.splitlines()[0])
+        assert n is not None and 400 <= int(n.group(1)) <= 410, captured.out.splitlines()[0]
         plans.append(json.loads((tmp_path / str(k) / "schedule.json").read_text()))
     assert plans[0] == plans[1]
+
+
+def test_a_search_the_clock_stopped_is_flagged() -> None:
+    from workcell import compile_cell, load_example
+    from workcell.pipeline import WALL_CAP_FACTOR, solve_cell
+
+    cc = compile_cell(load_example("scara4"))
+    cut = solve_cell(cc, evaluations=10_000_000, time_limit=0.1)
+    assert cut.time_bound and cut.result.runtime >= 0.99 * 0.1 * WALL_CAP_FACTOR
+    assert cut.result.stats.evaluations < 10_000_000
+    done = solve_cell(cc, evaluations=200, time_limit=60.0)
+    assert not done.time_bound and done.result.stats.evaluations >= 200
 
 
 def test_progress_lines_when_stderr_is_not_a_terminal(

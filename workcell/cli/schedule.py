@@ -16,9 +16,10 @@ import sys
 from pathlib import Path
 
 from multiarm.errors import MultiarmError, UsageError
-from scheduler import Problem, Progress, lower_bound
+from scheduler import Problem, Result, lower_bound
+from scheduler import Progress as SolveProgress
 from workcell.cli import args as common
-from workcell.cli.output import EXIT_ERROR, EXIT_INTERRUPTED, EXIT_OK
+from workcell.cli.output import EXIT_ERROR, EXIT_INTERRUPTED, EXIT_OK, Progress
 from workcell.pipeline import MAX_EVALUATIONS, solve_limited
 
 __all__ = ["add_arguments", "run"]
@@ -49,6 +50,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--rows", type=int, default=50, metavar="N", help="print at most N rows of the schedule"
     )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar or lines")
 
 
 def _check_out_file(name: str) -> None:
@@ -76,23 +78,12 @@ def run(args: argparse.Namespace) -> int:
     if args.evaluations is not None and args.solver != "tree":
         raise UsageError("--evaluations is a work limit of the tree search (--solver tree)")
     common.check_count("--evaluations", args.evaluations, 1, MAX_EVALUATIONS)
-    problem: Problem = load_schedulable(args.problem)
-    print(f"{problem!r}; lower bound {lower_bound(problem):.6g}")
-
-    def improved(pr: Progress) -> None:
-        print(
-            f"  {pr.elapsed:9.3f} s  makespan {pr.objective:.6g}  bound {pr.bound:.6g}", flush=True
-        )
-
-    result, _evaluations, _cap = solve_limited(
-        problem,
-        args.solver,
-        time_limit=args.time_limit,
-        evaluations=args.evaluations,
-        seed=args.seed,
-        waits=not args.no_waits,
-        on_improve=improved if args.verbose else None,
-    )
+    with Progress(2, "schedule", enabled=not args.no_progress) as bar:
+        bar.step(f"read {args.problem} (a cell is compiled)")
+        problem: Problem = load_schedulable(args.problem)
+        print(f"{problem!r}; lower bound {lower_bound(problem):.6g}", flush=True)
+        bar.step(f"solve ({args.solver}, time limit {args.time_limit:g} s)")
+        result = _solve(problem, args)
     print(result.summary())
     if result.stats.interrupted:  # Ctrl-C: the best schedule so far is printed, not written
         print("interrupted: multiarm schedule stopped (Ctrl-C)", file=sys.stderr)
@@ -108,3 +99,23 @@ def run(args: argparse.Namespace) -> int:
             raise
         print(f"schedule written to {args.out}")
     return EXIT_OK if result.schedule is not None else EXIT_ERROR
+
+
+def _solve(problem: Problem, args: argparse.Namespace) -> Result:
+    """The solve, printing each improvement with ``--verbose``."""
+
+    def improved(pr: SolveProgress) -> None:
+        print(
+            f"  {pr.elapsed:9.3f} s  makespan {pr.objective:.6g}  bound {pr.bound:.6g}", flush=True
+        )
+
+    result, _evaluations, _cap = solve_limited(
+        problem,
+        args.solver,
+        time_limit=args.time_limit,
+        evaluations=args.evaluations,
+        seed=args.seed,
+        waits=not args.no_waits,
+        on_improve=improved if args.verbose else None,
+    )
+    return result

@@ -119,9 +119,10 @@ def _print_run(result: CellRun, args: argparse.Namespace, out: Path) -> None:
         f"compiled in {result.compiled.seconds:.1f} s; {result.result.summary()}"
     )
     if result.time_bound:
+        fix = "raise --time-limit or lower --evaluations" if args.solver == "tree" else "use tree"
         print(
-            "note: the time limit, not the work limit, stopped the search: the plan may "
-            "differ from run to run (raise --time-limit or lower --evaluations)"
+            f"note: the clock, not a work limit, stopped the {args.solver} solver before it proved "
+            f"its plan optimal: the plan may differ from run to run ({fix})"
         )
     print(
         f"simulated (seed {args.seed}, medium {args.network!r}, "
