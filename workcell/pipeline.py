@@ -56,6 +56,7 @@ from multiarm.errors import FormatError, NoFeasibleSchedule, UsageError
 from multiarm.text import parse_json, parse_toml
 from scheduler import Problem, Progress, Result, Schedule, solve, validate
 from scheduler.problem import ProblemLike
+from scheduler.solve import MAX_SEED
 from scheduler.tree import TreeOptions
 from workcell.cell import EXAMPLES, Cell, load_cell, load_example
 from workcell.compile import CompiledCell, compile_cell
@@ -367,6 +368,31 @@ def _check_frames(frames: int) -> None:
         raise UsageError(f"frames must be an int in 0..{MAX_FRAMES}, got {frames!r}")
 
 
+def _work_limit(solver: str, time_limit: float | None, evaluations: int | None) -> int | None:
+    """Check the limits of a solve; the tree search's work limit (None for other solvers)."""
+    if time_limit is None:
+        if evaluations is None:
+            raise UsageError("time_limit=None (no clock) needs a work limit: evaluations=N")
+    elif not _is_seconds(time_limit):
+        raise UsageError(
+            f"time_limit must be a number of seconds in (0, {MAX_TIME_LIMIT:g}], got {time_limit!r}"
+        )
+    if evaluations is not None:
+        if solver != "tree":
+            raise UsageError(f"evaluations is a work limit of the tree search, not of {solver!r}")
+        if (
+            isinstance(evaluations, bool)
+            or not isinstance(evaluations, int)
+            or not 1 <= evaluations <= MAX_EVALUATIONS
+        ):
+            raise UsageError(
+                f"evaluations must be an int in 1..{MAX_EVALUATIONS}, got {evaluations!r}"
+            )
+    elif solver == "tree" and time_limit is not None:
+        evaluations = default_evaluations(time_limit)
+    return evaluations
+
+
 def solve_limited(
     problem: ProblemLike,
     solver: SolverName = "tree",
@@ -407,26 +433,7 @@ def solve_limited(
     UsageError
         A bad limit, or ``evaluations`` for a solver other than ``tree``.
     """
-    if time_limit is None:
-        if evaluations is None:
-            raise UsageError("time_limit=None (no clock) needs a work limit: evaluations=N")
-    elif not _is_seconds(time_limit):
-        raise UsageError(
-            f"time_limit must be a number of seconds in (0, {MAX_TIME_LIMIT:g}], got {time_limit!r}"
-        )
-    if evaluations is not None:
-        if solver != "tree":
-            raise UsageError(f"evaluations is a work limit of the tree search, not of {solver!r}")
-        if (
-            isinstance(evaluations, bool)
-            or not isinstance(evaluations, int)
-            or not 1 <= evaluations <= MAX_EVALUATIONS
-        ):
-            raise UsageError(
-                f"evaluations must be an int in 1..{MAX_EVALUATIONS}, got {evaluations!r}"
-            )
-    elif solver == "tree" and time_limit is not None:
-        evaluations = default_evaluations(time_limit)
+    evaluations = _work_limit(solver, time_limit, evaluations)
     cap = (
         None
         if time_limit is None
@@ -477,9 +484,9 @@ def solve_cell(
             raise UsageError("compile_options: the cell is compiled already")
     elif not isinstance(cell, Cell):
         raise UsageError(f"expected a workcell.Cell or CompiledCell, got {type(cell).__name__}")
-    if evaluations is None and solver == "tree" and _is_seconds(time_limit):
-        assert time_limit is not None
-        evaluations = default_evaluations(time_limit)
+    evaluations = _work_limit(solver, time_limit, evaluations)  # checked before the compile
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+        raise UsageError(f"seed must be an int in 0..{MAX_SEED}, got {seed!r}")
     if isinstance(cell, CompiledCell):
         compiled = cell
     else:
