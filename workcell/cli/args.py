@@ -27,12 +27,14 @@ from workcell.pipeline import (
 __all__ = [
     "MAX_EPISODES",
     "MAX_WORKERS",
+    "add_evaluations",
     "add_network",
     "add_seed",
     "add_solver",
     "add_time_limit",
     "check_count",
     "check_network",
+    "check_sim",
     "check_time_limit",
     "out_dir",
 ]
