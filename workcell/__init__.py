@@ -9,6 +9,9 @@
   sweep, the space grid, travel setups, the blocking oracle with OMPL
   detours) and whose ``.modes`` are the trajectories behind it.
   ``scheduler.solve`` and ``scheduler.validate`` accept it as it is.
+* :func:`run_cell`: the main job in one call, compile → solve → validate →
+  simulate → write (:mod:`workcell.pipeline`), returning a :class:`CellRun`;
+  :func:`solve_cell` stops after the solve (a :class:`SolvedCell`).
 * :mod:`workcell.arms`, :mod:`workcell.geometry`: arm models and motion
   timing; the collision world, sweeps and the detour planner.
 * :mod:`workcell.cli`: the ``multiarm`` command.
@@ -33,6 +36,7 @@ from workcell.compile import (
 )
 from workcell.compiled import CompiledMode, CompileOptions
 from workcell.oracle import CellOracle
+from workcell.pipeline import CellRun, RunStatus, SolvedCell, run_cell, solve_cell
 from workcell.sim.faults import (
     ActivateZones,
     ArmFailure,
@@ -53,6 +57,7 @@ __all__ = [
     "ArmFailure",
     "Cell",
     "CellOracle",
+    "CellRun",
     "CompileOptions",
     "CompiledCell",
     "CompiledMode",
@@ -62,8 +67,10 @@ __all__ = [
     "LatePart",
     "LostSync",
     "MessageLoss",
+    "RunStatus",
     "SimOptions",
     "SimResult",
+    "SolvedCell",
     "cell_from_dict",
     "compile_cell",
     "compile_cell_detailed",
@@ -71,5 +78,7 @@ __all__ = [
     "dcr_bound",
     "load_cell",
     "load_example",
+    "run_cell",
     "simulate",
+    "solve_cell",
 ]

@@ -27,6 +27,8 @@ def test_demo_compiles_and_schedules_every_builtin_cell(
     assert out.count("per arm:") == n and out.count("per zone:") == n
     for solver in ("greedy", "tree", "cpsat"):  # the scheduling step ran with every solver
         assert out.count(f"\n{solver} ") == n
+    # the parking cell says what its OMPL detour bought (S2.6)
+    assert "parking: detours (tree): 1 OMPL detour" in out and "the detours save" in out
     for name in EXAMPLES:  # each plan ran, as planned and with a failure
         for run in ("nominal", "arm_failure"):
             assert (tmp_path / name / run / "trace.json").is_file()

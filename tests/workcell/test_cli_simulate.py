@@ -8,7 +8,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+import workcell.cli.demo
 import workcell.compile
+import workcell.pipeline
 from workcell.cli import main
 
 OUTPUTS = (
@@ -105,6 +107,8 @@ def no_compile(monkeypatch: pytest.MonkeyPatch) -> None:
         raise AssertionError("compiled before checking the arguments")
 
     monkeypatch.setattr(workcell.compile, "compile_cell", refuse)
+    monkeypatch.setattr(workcell.pipeline, "compile_cell", refuse)
+    monkeypatch.setattr(workcell.cli.demo, "compile_cell", refuse)
 
 
 def _bad(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
@@ -132,7 +136,9 @@ def test_bad_arguments_are_one_line_errors_before_any_work(
     err = _bad(["simulate", "supersigma", "--time-limit", "0"], capsys)
     assert "--time-limit must be a finite number of seconds > 0" in err
     err = _bad(["simulate", "supersigma", "--tick", "-1"], capsys)
-    assert "--tick must be a finite number of seconds > 0" in err
+    assert "--tick must be a finite number of seconds in (0, 1]" in err
+    err = _bad(["simulate", "supersigma", "--tick", "1e6"], capsys)
+    assert "--tick must be a finite number of seconds in (0, 1], got 1000000.0" in err
     err = _bad(["simulate", "supersigma", "--faults", str(tmp_path / "missing.toml")], capsys)
     assert "--faults: cannot read" in err and "No such file" in err
     bad = tmp_path / "bad.toml"
@@ -160,6 +166,12 @@ def test_bad_arguments_are_one_line_errors_before_any_work(
     assert "--evaluations is a work limit of the tree search" in err
     err = _bad(["simulate", "supersigma", "--evaluations", "0"], capsys)
     assert "--evaluations must be >= 1, got 0" in err
+    err = _bad(["simulate", "supersigma", "--evaluations", "10000001"], capsys)
+    assert "--evaluations must be at most 10000000, got 10000001" in err
+    err = _bad(["simulate", "supersigma", "--frames", "1000000"], capsys)
+    assert "--frames must be at most 1000, got 1000000" in err
+    err = _bad(["simulate", "supersigma", "--time-limit", "1e9"], capsys)
+    assert "--time-limit must be at most 86400 s" in err
     err = _bad(["demo", "--cells", "nocell"], capsys)
     assert "--cells: unknown built-in cell 'nocell'" in err
     err = _bad(["demo", "--network", "pigeon", "--out", str(tmp_path / "d")], capsys)
@@ -191,17 +203,16 @@ def test_demo_simulates_and_injects_a_fault(
 def test_demo_reports_a_stopped_run_and_fails(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import workcell.sim.run
     from multiarm.errors import MultiarmError
 
-    real = workcell.sim.run.simulate
+    real = workcell.pipeline.simulate
 
     def stop_faulty_runs(*args: object, **kw: object) -> object:
-        if kw.get("faults") is not None:
+        if kw.get("faults"):  # a non-empty fault plan
             raise MultiarmError("arms 'left' and 'right' collide at t = 1 s")
         return real(*args, **kw)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(workcell.sim.run, "simulate", stop_faulty_runs)
+    monkeypatch.setattr(workcell.pipeline, "simulate", stop_faulty_runs)
     out = tmp_path / "out"
     argv = ["demo", "--cells", "supersigma", "--time-limit", "0.3", "--out", str(out)]
     assert main(argv) == 1
@@ -242,7 +253,9 @@ def test_simulate_writes_to_out_cellname_by_default(
 ) -> None:
     monkeypatch.chdir(tmp_path)
     assert main(["simulate", "supersigma", "--solver", "greedy"]) == 0
-    assert "wrote 7 files to out/supersigma/" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "wrote 7 files to out/supersigma/" in text
+    assert text.rstrip().endswith("\nstatus: ok, 10 of 10 tasks done")  # the last line
     assert sorted(p.name for p in (tmp_path / "out" / "supersigma").iterdir()) == sorted(OUTPUTS)
 
 

@@ -223,18 +223,12 @@ def prepare(cell: str, evaluations: int = PLAN_EVALUATIONS) -> CampaignCell:
     NoFeasibleSchedule
         The solver found no plan.
     """
-    from multiarm.errors import NoFeasibleSchedule
-    from scheduler import solve
-    from scheduler.tree import TreeOptions
     from workcell.arms.profiles import StepperDrive
-    from workcell.compile import compile_cell
+    from workcell.pipeline import solve_cell
 
-    cc = compile_cell(_load(cell))
-    p = cc.problem
-    r = solve(p, "tree", time_limit=None, seed=0, options=TreeOptions(max_evaluations=evaluations))
-    if r.schedule is None:
-        raise NoFeasibleSchedule(f"campaign: cell {cell!r}: the tree search found no plan")
-    s = r.schedule
+    # the compile and solve steps of run_cell, on the work limit alone (no clock)
+    solved = solve_cell(_load(cell), solver="tree", time_limit=None, evaluations=evaluations)
+    cc, p, s = solved.compiled, solved.problem, solved.schedule
     ts = cc.cell.taskset
     arrivals = ts.expected_arrivals()
     arms = tuple(str(a) for a in p.arm_names)
