@@ -37,7 +37,7 @@ Examples
 >>> result = simulate(cc, solve(cc.problem, "greedy", seed=0).schedule)
 >>> data = build_replay(result, cc, max_frames=200)
 >>> data.arm_names
-('s1', 's2', 's3', 's4')
+('sw', 'se', 'ne', 'nw')
 >>> data.n_frames, round(data.duration, 3) == round(result.metrics.executed_makespan, 3)
 (200, True)
 >>> ReplayData.from_json(data.to_json()) == data
@@ -81,7 +81,7 @@ REPLAY_FILE = "replay.json"
 
 STATE_COLOURS: dict[str, str] = {
     "free": "#9a9a9a",
-    "occupied": "#3b4a6b",
+    "occupied": "#505050",
     "moving": "#e0b000",
     "waiting": "#c2187a",
 }
@@ -328,7 +328,7 @@ def load_replay(path: str | PathLike[str]) -> ReplayData:
     try:
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise UsageError(f"{str(p)!r}: no such file") from None
+        raise UsageError(f"{str(p)!r}: no such file or directory") from None
     except (OSError, UnicodeDecodeError) as exc:
         why = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
         raise UsageError(f"{str(p)!r}: cannot read it: {why}") from None

@@ -9,17 +9,8 @@ cell in 3D (drag to turn, wheel to zoom), a time slider with play and
 pause, a Gantt strip whose cursor follows the slider (click it to jump), the
 zones coloured by state and the faults marked.
 
-Examples
---------
->>> import tempfile, pathlib
->>> from workcell import compile_cell, load_example, simulate
->>> from scheduler import solve
->>> cc = compile_cell(load_example("scara4"))
->>> result = simulate(cc, solve(cc.problem, "greedy", seed=0).schedule)
->>> path = write_html(result, cc, pathlib.Path(tempfile.mkdtemp()) / "replay.html")
->>> text = path.read_text()
->>> text.startswith("<!DOCTYPE html>"), "multiarm.replay/1" in text, "http" in text.split("<script")[0]
-(True, True, False)
+
+:func:`workcell.replay.data.build_replay` has an example of the whole path.
 """
 
 from __future__ import annotations
@@ -234,6 +225,6 @@ def show(
     )
     page = html.escape(render_html(data), quote=True)
     return HTML(  # type: ignore[no-untyped-call]
-        f'<iframe srcdoc="{page}" style="width:100%;height:{int(height)}px;border:1px solid #ddd" '
-        'sandbox="allow-scripts"></iframe>'
+        f'<div><iframe srcdoc="{page}" style="width:100%;height:{int(height)}px;'
+        'border:1px solid #ddd" sandbox="allow-scripts"></iframe></div>'
     )

@@ -109,7 +109,7 @@ async function main() {
 
   const camera = new THREE.PerspectiveCamera(40, 1, radius / 100, radius * 50);
   camera.up.set(0, 0, 1);
-  camera.position.copy(centre).add(new THREE.Vector3(1.1, -1.6, 1.2).multiplyScalar(radius * 1.3));
+  camera.position.copy(centre).add(new THREE.Vector3(0.8, -1.3, 1.9).multiplyScalar(radius * 1.1));
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.target.copy(centre);
   controls.update();
