@@ -57,6 +57,7 @@ def test_cell_file_example_in_docs_loads() -> None:
         "networks.md",
         "simulation.md",
         "plots.md",
+        "replay.md",
         "README",
     ],
 )

@@ -355,8 +355,16 @@ class _Meshes:
         return self._index[key]
 
 
-def _cell_of(cell_or_compiled: Any) -> tuple[Any, float]:
-    """The Cell and its space-grid block side (metres, 0: off)."""
+def _cell_of(cell_or_compiled: Any, result: Any = None) -> tuple[Any, float]:
+    """The Cell and its space-grid block side (metres, 0: off); with no cell
+    given, the run's own (``result.compiled`` or ``result.cell``) if it keeps one."""
+    if cell_or_compiled is None:
+        cell_or_compiled = getattr(result, "compiled", None) or getattr(result, "cell", None)
+        if cell_or_compiled is None:
+            raise UsageError(
+                "this run does not keep its cell: pass the Cell or CompiledCell it was "
+                "simulated in"
+            )
     cell = getattr(cell_or_compiled, "cell", cell_or_compiled)
     if not (hasattr(cell, "arms") and hasattr(cell, "zone_map")):
         raise UsageError(
@@ -563,10 +571,11 @@ def build_replay(
     ----------
     result : workcell.SimResult
         The run (anything with the attributes of :class:`RunLike`).
-    cell_or_compiled : Cell or CompiledCell
+    cell_or_compiled : Cell or CompiledCell or None
         The cell the run was simulated in (its arms draw the bodies, its
         zone map the zones; a CompiledCell also gives the space-grid block
-        side it was compiled with).
+        side it was compiled with). None: the run's own ``compiled`` or
+        ``cell`` attribute, for a run that keeps it.
     rate : float
         Samples per second of the time grid (the page interpolates between
         them), capped by ``max_frames``.
@@ -586,7 +595,7 @@ def build_replay(
     Raises
     ------
     UsageError
-        Bad arguments, or a run whose arms are not the cell's.
+        Bad arguments, no cell, or a run whose arms are not the cell's.
     """
     if not (isinstance(rate, int | float) and math.isfinite(rate) and rate > 0):
         raise UsageError(f"rate must be a number of samples per second > 0, got {rate!r}")
@@ -594,7 +603,7 @@ def build_replay(
         raise UsageError(f"max_frames must be an integer >= 2, got {max_frames!r}")
     if geometry not in ("auto", "shapes"):
         raise UsageError(f"geometry must be 'auto' or 'shapes', not {geometry!r}")
-    cell, grid = _cell_of(cell_or_compiled)
+    cell, grid = _cell_of(cell_or_compiled, result)
     order = tuple(str(a) for a in result.problem.arm_names)
     by_name = {str(a.name): a for a in cell.arms}
     if set(order) != set(by_name):

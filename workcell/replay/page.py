@@ -159,8 +159,8 @@ def write_html(
     result : workcell.SimResult or ReplayData
         The run, or a replay document already built (``cell_or_compiled``
         is then ignored and may be None).
-    cell_or_compiled : Cell or CompiledCell
-        The cell the run was simulated in.
+    cell_or_compiled : Cell or CompiledCell or None
+        The cell the run was simulated in (None: the run's own, if it keeps it).
     path : path-like
         The HTML file to write (its directory must exist).
     rate, max_frames, geometry, title

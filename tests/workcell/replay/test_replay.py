@@ -157,6 +157,9 @@ def test_bad_arguments(scara4_run: Any, scara4_cc: Any, tmp_path: Path) -> None:
         build_replay(scara4_run, scara4_cc, geometry="wire")  # type: ignore[arg-type]
     with pytest.raises(UsageError, match="Cell or a CompiledCell"):
         build_replay(scara4_run, object())
+    if not hasattr(scara4_run, "compiled") and not hasattr(scara4_run, "cell"):
+        with pytest.raises(UsageError, match="does not keep its cell"):
+            build_replay(scara4_run, None)
     with pytest.raises(UsageError, match="does not exist"):
         write_html(scara4_run, scara4_cc, tmp_path / "no" / "x.html")
 
