@@ -362,8 +362,7 @@ def _cell_of(cell_or_compiled: Any, result: Any = None) -> tuple[Any, float]:
         cell_or_compiled = getattr(result, "compiled", None) or getattr(result, "cell", None)
         if cell_or_compiled is None:
             raise UsageError(
-                "this run does not keep its cell: pass the Cell or CompiledCell it was "
-                "simulated in"
+                "this run does not keep its cell: pass the Cell or CompiledCell it was simulated in"
             )
     cell = getattr(cell_or_compiled, "cell", cell_or_compiled)
     if not (hasattr(cell, "arms") and hasattr(cell, "zone_map")):
