@@ -22,7 +22,9 @@ from a run directory without the cell or the simulator
   is ``occupied`` (an arm holds it), ``moving`` (an arm moves inside a
   shared zone) or ``waiting`` (an arm stands at its border, asleep until it
   is granted, S2.6); ``free`` otherwise;
-* ``tasks``: executed start and end, planned start and end, status;
+* ``tasks``: executed start and end, planned start and end, status and
+  cause (a task cut short ends at its arm's first fault after its start,
+  or at the end of the replay; a task that never ran has no start);
 * ``faults``: kind (a key of :data:`workcell.viz.style.FAULT_MARKS`), arm,
   time and end.
 
@@ -104,6 +106,8 @@ class EventLike(Protocol):
     def task(self) -> str: ...
     @property
     def zone(self) -> str: ...
+    @property
+    def delay(self) -> float: ...
     @property
     def detail(self) -> str: ...
 
@@ -375,14 +379,25 @@ def _cell_of(cell_or_compiled: Any, result: Any = None) -> tuple[Any, float]:
     return cell, float(grid or 0.0)
 
 
+_ACTIVITY = frozenset(
+    {"fault", "task_start", "task_end", "zone_enter", "zone_leave", "sleep", "wake", "grant"}
+)
+"""Trace records that happen in the cell and so bound the replay's time range."""
+
+
 def _duration(result: RunLike, tasks: Sequence[Mapping[str, Any]]) -> float:
     m = result.metrics
     ends = [
         _finite(getattr(m, "executed_makespan", math.nan)),
         *(_finite(t["end"]) for t in tasks),
         *(_finite(t["start"]) for t in tasks),
+        *(_finite(t["planned_end"]) for t in tasks if t["status"] != "done"),
     ]
-    ends += [_finite(e.time) for e in result.trace if e.kind != "monitor"]
+    for e in result.trace:  # what moved or happened in the cell (not when a failure was logged)
+        if e.kind == "segment":
+            ends.append(_finite(float(e.time) + float(e.delay)))
+        elif e.kind in _ACTIVITY:
+            ends.append(_finite(e.time))
     known = [e for e in ends if e is not None]
     return max([*known, 1e-3])
 
@@ -441,9 +456,10 @@ def _faults(result: RunLike, arm_index: Mapping[str, int]) -> list[dict[str, Any
 
 
 def _zone_states(
-    result: RunLike, arm_index: Mapping[str, int], duration: float
+    result: RunLike, arm_index: Mapping[str, int], duration: float, failed: Mapping[int, float]
 ) -> tuple[list[str], list[dict[str, Any]]]:
-    """Zone names in order of first use and the intervals of their states."""
+    """Zone names in order of first use and the intervals of their states
+    (an arm never woken waits until it fails for good, ``failed``, or to the end)."""
     names: dict[str, int] = {}
     states: list[dict[str, Any]] = []
 
@@ -487,8 +503,9 @@ def _zone_states(
                         "end": float(ev.time),
                     }
                 )
-    for (arm, name), (t0, task) in asleep.items():  # never woken: waits to the end
-        if arm in arm_index:
+    for (arm, name), (t0, task) in asleep.items():  # never woken
+        end = failed.get(arm_index.get(arm, -1), duration)
+        if arm in arm_index and end > t0:
             states.append(
                 {
                     "zone": zone(name),
@@ -496,7 +513,7 @@ def _zone_states(
                     "arm": arm_index[arm],
                     "task": task,
                     "start": t0,
-                    "end": duration,
+                    "end": end,
                 }
             )
     states.sort(key=lambda s: (s["start"], s["zone"]))
@@ -576,7 +593,8 @@ def build_replay(
         side it was compiled with). None: the run's own ``compiled`` or
         ``cell`` attribute, for a run that keeps it.
     rate : float
-        Samples per second of the time grid (the page interpolates between
+        Samples per second of the time grid over ``[0, duration]`` (the
+        last event of the run, or the planned end of a task that failed) (the page interpolates between
         them), capped by ``max_frames``.
     max_frames : int
         Largest number of samples, >= 2.
@@ -615,6 +633,13 @@ def build_replay(
 
     tasks = _tasks(result, arm_index)
     duration = _duration(result, tasks)
+    faults = _faults(result, arm_index)
+    for t in tasks:  # a task cut short ends at its arm's first fault after its start
+        if t["start"] is not None and t["end"] is None:
+            t["end"] = min(
+                (f["time"] for f in faults if f["arm"] == t["arm"] and f["time"] >= t["start"]),
+                default=duration,
+            )
     n = int(min(max_frames, max(2, math.ceil(duration * rate) + 1)))
     times = np.linspace(0.0, duration, n)
     joints = result.joints(times)
@@ -647,7 +672,11 @@ def build_replay(
     packed = np.concatenate([qpos, qrot], axis=-1).astype("<i2").transpose(1, 2, 0)
 
     sdl = _zone_solids(cell, meshes)
-    used, states = _zone_states(result, arm_index, duration)
+    failed: dict[int, float] = {}
+    for f in faults:
+        if f["kind"] == "arm_failure" and f["arm"] >= 0:
+            failed.setdefault(f["arm"], f["time"])
+    used, states = _zone_states(result, arm_index, duration, failed)
     zones = []
     for name in [*sdl, *(u for u in used if u not in sdl)]:
         policy, solids = sdl.get(name, ("exclusive", _grid_solid(name, grid)))
@@ -695,7 +724,7 @@ def build_replay(
         "zones": zones,
         "zone_states": states,
         "tasks": tasks,
-        "faults": _faults(result, arm_index),
+        "faults": faults,
         "fault_marks": {
             k: {"symbol": mark.marker, "label": mark.label} for k, mark in FAULT_MARKS.items()
         },

@@ -89,17 +89,26 @@ def _legend(data: ReplayData) -> str:
             rows.append(
                 f'<div><span class="sw" style="background:{colour};opacity:.7"></span>{what}</div>'
             )
-    kinds = dict.fromkeys(f["kind"] for f in doc["faults"])
-    if kinds or any(t["status"] == "failed" for t in doc["tasks"]):
-        rows.append("<b>Gantt marks</b>")
-        if any(t["status"] == "failed" for t in doc["tasks"]):
-            rows.append('<div><span class="sw" style="background:#d62728"></span>failed task</div>')
-        for k in kinds:
-            mark = doc["fault_marks"].get(k, doc["fault_marks"]["other"])
-            glyph = _MARK_GLYPH.get(mark["symbol"], "&#10010;")
-            rows.append(
-                f'<div><span style="color:#d62728">{glyph}</span> {html.escape(mark["label"])}</div>'
-            )
+    rows.append("<b>Gantt strip</b>")
+    rows.append('<div><span class="sw" style="background:#888"></span>task as run</div>')
+    rows.append(
+        '<div><span class="sw" style="background:#ccc;height:4px;vertical-align:2px"></span>'
+        "the plan</div>"
+    )
+    tasks = doc["tasks"]
+    if any(t["status"] == "failed" and t["start"] is not None for t in tasks):
+        rows.append('<div><span class="sw" style="background:#d62728"></span>failed task</div>')
+    if any(t["status"] == "failed" and t["start"] is None for t in tasks):
+        rows.append(
+            '<div><span class="sw" style="background:#fde8e8;border:1px dashed #d62728"></span>'
+            "failed task that never ran</div>"
+        )
+    for k in dict.fromkeys(f["kind"] for f in doc["faults"]):
+        mark = doc["fault_marks"].get(k, doc["fault_marks"]["other"])
+        glyph = _MARK_GLYPH.get(mark["symbol"], "&#10010;")
+        rows.append(
+            f'<div><span style="color:#d62728">{glyph}</span> {html.escape(mark["label"])}</div>'
+        )
     return "\n".join(rows)
 
 

@@ -27,3 +27,14 @@ def scara4_faulty_run(scara4_cc: Any) -> Any:
     plan = solve(scara4_cc.problem, "greedy", seed=0).schedule
     faults = [Crash("se", 20.0, recovery=2.0), ArmFailure("nw", 60.0)]
     return simulate(scara4_cc, plan, faults=faults)
+
+
+@pytest.fixture(scope="session")
+def scara4_failed_run(scara4_cc: Any) -> Any:
+    """se fails for good at 30 s and nothing is re-solved: 15 tasks fail."""
+    from workcell import SimOptions
+
+    plan = solve(scara4_cc.problem, "greedy", seed=0).schedule
+    return simulate(
+        scara4_cc, plan, faults=[ArmFailure("se", 30.0)], options=SimOptions(resolve=False)
+    )

@@ -65,6 +65,13 @@ async function meshGeometry(m) {
   return g;
 }
 
+// black or white text, whichever reads on ``hex``
+function ink(hex) {
+  const v = parseInt(hex.slice(1), 16);
+  const [r, g, b] = [(v >> 16) & 255, (v >> 8) & 255, v & 255].map((x) => x / 255);
+  return 0.299 * r + 0.587 * g + 0.114 * b > 0.55 ? "#000" : "#fff";
+}
+
 function matrixOf(rowMajor) {
   const m = new THREE.Matrix4();
   m.set(...rowMajor);
@@ -312,21 +319,50 @@ async function main() {
       ctx.fillStyle = k < data.arms.length ? data.arms[k].colour : "#444";
       ctx.fillText(name, 4, y + laneH / 2, labelW - 8);
     });
+    const barH = laneH - 9;
     for (const task of data.tasks) {
-      if (!(task.end > task.start)) continue;
       const y = task.arm * laneH + 3;
-      const x0 = xOf(task.start);
-      const x1 = Math.max(xOf(task.end), x0 + 1);
       const colour = data.arms[task.arm].colour;
-      ctx.fillStyle = task.status === "failed" ? "#d62728" : colour;
-      ctx.fillRect(x0, y, x1 - x0, laneH - 6);
-      ctx.strokeStyle = "rgba(0,0,0,0.55)";
-      ctx.lineWidth = 0.8;
-      ctx.strokeRect(x0, y, x1 - x0, laneH - 6);
+      // the plan: a thin light strip under the lane's bars
+      if (task.planned_end > task.planned_start) {
+        ctx.fillStyle = colour;
+        ctx.globalAlpha = 0.4;
+        const p0 = xOf(task.planned_start);
+        ctx.fillRect(p0, y + barH + 2, Math.max(xOf(task.planned_end) - p0 - 1, 1), 3);
+        ctx.globalAlpha = 1;
+      }
+      let x0;
+      let x1;
+      let fill;
+      if (task.start !== null && task.end > task.start) {
+        x0 = xOf(task.start);
+        x1 = Math.max(xOf(task.end), x0 + 1);
+        fill = task.status === "failed" ? "#d62728" : colour;
+        ctx.fillStyle = fill;
+        ctx.fillRect(x0, y, x1 - x0, barH);
+        ctx.strokeStyle = "rgba(0,0,0,0.55)";
+        ctx.lineWidth = 0.8;
+        ctx.setLineDash([]);
+        ctx.strokeRect(x0, y, x1 - x0, barH);
+      } else if (task.status === "failed" && task.planned_end > task.planned_start) {
+        // never ran: its planned slot, outlined in red
+        x0 = xOf(task.planned_start);
+        x1 = Math.max(xOf(task.planned_end), x0 + 1);
+        fill = "#fde8e8";
+        ctx.fillStyle = fill;
+        ctx.fillRect(x0, y, x1 - x0, barH);
+        ctx.strokeStyle = "#d62728";
+        ctx.lineWidth = 1;
+        ctx.setLineDash([3, 2]);
+        ctx.strokeRect(x0, y, x1 - x0, barH);
+        ctx.setLineDash([]);
+      } else {
+        continue;
+      }
       const w = ctx.measureText(task.task).width;
       if (w < x1 - x0 - 4) {
-        ctx.fillStyle = "#fff";
-        ctx.fillText(task.task, x0 + 2, y + (laneH - 6) / 2);
+        ctx.fillStyle = ink(fill);
+        ctx.fillText(task.task, x0 + 2, y + barH / 2);
       }
     }
     for (const f of data.faults) {
