@@ -22,7 +22,8 @@ from a run directory without the cell or the simulator
   is ``occupied`` (an arm holds it), ``moving`` (an arm moves inside a
   shared zone) or ``waiting`` (an arm stands at its border, asleep until it
   is granted, S2.6); ``free`` otherwise;
-* ``tasks``: executed start and end, planned start and end, status and
+* ``tasks``: the arm that ran it and the arm the given plan put it on,
+  executed start and end, planned start and end, status and
   cause (a task cut short ends at its arm's first fault after its start,
   or at the end of the replay; a task that never ran has no start);
 * ``faults``: kind (a key of :data:`workcell.viz.style.FAULT_MARKS`), arm,
@@ -402,17 +403,29 @@ def _duration(result: RunLike, tasks: Sequence[Mapping[str, Any]]) -> float:
     return max([*known, 1e-3])
 
 
+def _planned_arms(result: RunLike) -> dict[str, str]:
+    """Task -> the arm the given plan put it on (a re-solve may have moved it)."""
+    schedule = getattr(result, "schedule", None)
+    if schedule is None or not hasattr(schedule, "to_dataframe"):
+        return {}
+    df = schedule.to_dataframe(result.problem)
+    return {str(r["task"]): str(r["arm"]) for r in df.to_dict("records")}
+
+
 def _tasks(result: RunLike, arm_index: Mapping[str, int]) -> list[dict[str, Any]]:
     df = result.tasks_frame()
+    planned_on = _planned_arms(result)
     out = []
     for row in df.to_dict("records"):
         arm = str(row["arm"])
         if arm not in arm_index:
             continue
+        task = str(row["task"])
         out.append(
             {
-                "task": str(row["task"]),
+                "task": task,
                 "arm": arm_index[arm],
+                "planned_arm": arm_index.get(planned_on.get(task, arm), arm_index[arm]),
                 "start": _finite(row.get("start")),
                 "end": _finite(row.get("end")),
                 "planned_start": _finite(row.get("planned_start")),

@@ -220,3 +220,15 @@ def test_bundle_is_the_pinned_three() -> None:
     assert f'window.__THREE__="{revision}"' in bundle
     assert "SPDX-License-Identifier: MIT" in bundle
     assert "MIT License" in (static / "three-LICENSE.txt").read_text()
+
+
+def test_planned_arm_is_the_given_plans(data: ReplayData, scara4_faulty_run: Any) -> None:
+    """After nw fails and its tasks are re-solved onto other arms, a task's
+    plan strip stays on the arm the given plan chose."""
+    plan = scara4_faulty_run.schedule.to_dataframe(scara4_faulty_run.problem)
+    planned = {r.task: r.arm for r in plan.itertuples()}
+    moved = 0
+    for t in data.document["tasks"]:
+        assert data.arm_names[t["planned_arm"]] == planned[t["task"]]
+        moved += t["planned_arm"] != t["arm"]
+    assert moved > 0, "nw's tasks ran on other arms"

@@ -323,12 +323,13 @@ async function main() {
     for (const task of data.tasks) {
       const y = task.arm * laneH + 3;
       const colour = data.arms[task.arm].colour;
-      // the plan: a thin light strip under the lane's bars
+      // the plan: a thin light strip under the bars of the arm it was planned on
       if (task.planned_end > task.planned_start) {
-        ctx.fillStyle = colour;
+        const pa = task.planned_arm ?? task.arm;
+        ctx.fillStyle = data.arms[pa].colour;
         ctx.globalAlpha = 0.4;
         const p0 = xOf(task.planned_start);
-        ctx.fillRect(p0, y + barH + 2, Math.max(xOf(task.planned_end) - p0 - 1, 1), 3);
+        ctx.fillRect(p0, pa * laneH + 3 + barH + 2, Math.max(xOf(task.planned_end) - p0 - 1, 1), 3);
         ctx.globalAlpha = 1;
       }
       let x0;
