@@ -97,3 +97,28 @@ def test_replay_in_chromium(
         # the faults are marked in the Gantt strip and listed in the legend
         legend = page.locator("#legend").inner_text()
         assert "crash" in legend and "arm failure" in legend
+
+
+def test_urdf_arms_as_meshes_in_chromium(ready: None, tmp_path: Path) -> None:
+    """urdf_cell: two UR5 and a Panda drawn as their links' collision meshes."""
+    from scheduler import solve
+    from workcell import compile_cell, load_example, simulate
+
+    cc = compile_cell(load_example("urdf_cell"))
+    run = simulate(cc, solve(cc.problem, "greedy", seed=0).schedule)
+    data = build_replay(run, cc, max_frames=300)
+    assert {b["kind"] for b in data.document["bodies"]} == {"mesh"}
+    path = write_html(data, None, tmp_path / "urdf_cell.html")
+    T = data.duration
+    with browser.open_page(path) as page:
+        page.add_style_tag(content="#legend{display:none}")
+        view = page.locator("#view canvas")
+        shots = []
+        for t in (0.0, 0.3 * T):
+            page.locator("#time").fill(f"{t:.3f}")
+            shots.append(_pixels(view.screenshot()))
+        moved = np.sum(np.abs(shots[0] - shots[1]).max(-1) > 0.1)
+        assert moved > 500, f"only {moved} pixels of the 3D view changed"
+        for a in data.document["arms"]:
+            n = _hue_share(shots[0], a["colour"])
+            assert n > 500, f"arm {a['name']} ({a['colour']}) shows in {n} pixels only"
