@@ -6,7 +6,7 @@ type="application/json">`` element, and the viewer script (three.js and the
 page's own code, bundled at build time into
 ``workcell/replay/static/replay.js``, docs/replay.md) inline. It shows the
 cell in 3D (drag to turn, wheel to zoom), a time slider with play and
-pause, a Gantt strip whose cursor follows the slider (click it to jump), the
+pause (also the space bar), a Gantt strip whose cursor follows the slider (click it to jump), the
 zones coloured by state and the faults marked.
 
 

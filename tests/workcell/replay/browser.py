@@ -58,8 +58,9 @@ def missing() -> str | None:
 
 
 @contextmanager
-def open_page(path: Path, width: int = 1100, height: int = 820) -> Iterator[Any]:
-    """A Playwright page showing the HTML file ``path`` once the replay is ready.
+def open_page(path: Path, width: int = 1100, height: int = 820, wait: bool = True) -> Iterator[Any]:
+    """A Playwright page showing the HTML file ``path`` once the replay is
+    ready (``wait=False``: once loaded, for a page that holds it in a frame).
 
     Raises AssertionError when the page reports an error or a script fails.
     """
@@ -74,12 +75,14 @@ def open_page(path: Path, width: int = 1100, height: int = 820) -> Iterator[Any]
             page = browser.new_page(viewport={"width": width, "height": height})
             page.on("pageerror", lambda e: errors.append(str(e)))
             page.goto(path.resolve().as_uri())
-            page.wait_for_function(
-                "window.multiarmReplay && (window.multiarmReplay.ready || window.multiarmReplay.error)",
-                timeout=20_000,
-            )
-            error = page.evaluate("window.multiarmReplay.error")
-            assert error is None, f"the replay page failed: {error}"
+            if wait:
+                page.wait_for_function(
+                    "window.multiarmReplay && "
+                    "(window.multiarmReplay.ready || window.multiarmReplay.error)",
+                    timeout=20_000,
+                )
+                error = page.evaluate("window.multiarmReplay.error")
+                assert error is None, f"the replay page failed: {error}"
             yield page
             assert not errors, f"script errors in the page: {errors}"
         finally:

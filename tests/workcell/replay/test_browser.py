@@ -122,3 +122,24 @@ def test_urdf_arms_as_meshes_in_chromium(ready: None, tmp_path: Path) -> None:
         for a in data.document["arms"]:
             n = _hue_share(shots[0], a["colour"])
             assert n > 500, f"arm {a['name']} ({a['colour']}) shows in {n} pixels only"
+
+
+def test_notebook_view_runs_in_its_frame(
+    ready: None, scara4_cc: Any, scara4_run: Any, tmp_path: Path
+) -> None:
+    """workcell.replay.show: the page inside a sandboxed iframe starts and plays."""
+    from workcell.replay import show
+
+    shown = show(scara4_run, scara4_cc, max_frames=100, height=600)
+    host = tmp_path / "notebook.html"
+    host.write_text(f"<!DOCTYPE html><html><body><h3>a notebook</h3>{shown.data}</body></html>")
+    with browser.open_page(host, wait=False) as page:
+        frame = page.frames[1]
+        frame.wait_for_function(
+            "window.multiarmReplay && (window.multiarmReplay.ready || window.multiarmReplay.error)",
+            timeout=20_000,
+        )
+        assert frame.evaluate("window.multiarmReplay.error") is None
+        frame.locator("#view canvas").click()  # focus in the frame, then the space bar plays
+        page.keyboard.press(" ")
+        frame.wait_for_function("window.multiarmReplay.time() > 0.05", timeout=10_000)

@@ -476,6 +476,15 @@ async function main() {
     pause();
     show(timeOf(ev.clientX - r.left));
   });
+  // the space bar plays and pauses (unless a control that uses it has the focus)
+  window.addEventListener("keydown", (ev) => {
+    const tag = document.activeElement ? document.activeElement.tagName : "";
+    if (ev.key === " " && tag !== "BUTTON" && tag !== "SELECT") {
+      ev.preventDefault();
+      if (playing) pause();
+      else play();
+    }
+  });
   controls.addEventListener("change", () => renderer.render(scene, camera));
   window.addEventListener("resize", () => {
     resize();
