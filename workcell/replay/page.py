@@ -89,6 +89,19 @@ def _legend(data: ReplayData) -> str:
             rows.append(
                 f'<div><span class="sw" style="background:{colour};opacity:.7"></span>{what}</div>'
             )
+    on_arms = {f["kind"] for f in doc["faults"] if f["arm"] >= 0}
+    if on_arms:
+        rows.append("<b>arms with faults</b>")
+        if "arm_failure" in on_arms:
+            rows.append(
+                '<div><span class="sw" style="background:#8c8c8c;border-color:#4a0000"></span>'
+                "failed for good</div>"
+            )
+        if on_arms - {"arm_failure"}:
+            rows.append(
+                '<div><span class="sw" style="background:#d62728"></span>'
+                "red flash: a fault on the arm</div>"
+            )
     rows.append("<b>Gantt strip</b>")
     rows.append('<div><span class="sw" style="background:#888"></span>task as run</div>')
     rows.append(

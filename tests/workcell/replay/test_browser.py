@@ -87,9 +87,19 @@ def test_replay_in_chromium(
         for arm, colour in colours.items():
             n = _hue_share(v0, colour)
             assert n > 1000, f"arm {arm} ({colour}) shows in {n} pixels only"
+        # nw fails for good at 60 s: it turns grey
+        nw = colours["nw"]
+        assert _hue_share(v2, nw) < 0.1 * _hue_share(v0, nw)
+        # se crashes at 20 s: it flashes the faults' red for a second
+        red = []
+        for t in (19.9, 20.4):
+            slider.fill(f"{t}")
+            red.append(_hue_share(_pixels(view.screenshot()), "#d62728"))
+        assert red[1] > 1000 and red[1] > 5 * red[0], f"red pixels before and in the flash: {red}"
         # play runs the clock on, pause stops it
+        t_before = page.evaluate("window.multiarmReplay.time()")
         page.locator("#play").click()
-        page.wait_for_function(f"window.multiarmReplay.time() > {0.5 * T + 0.05}", timeout=10_000)
+        page.wait_for_function(f"window.multiarmReplay.time() > {t_before + 0.05}", timeout=10_000)
         page.locator("#play").click()
         t_paused = page.evaluate("window.multiarmReplay.time()")
         page.wait_for_timeout(200)

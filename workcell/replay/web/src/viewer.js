@@ -166,6 +166,31 @@ async function main() {
   const armMaterial = armColour.map(
     (c) => new THREE.MeshStandardMaterial({ color: c, roughness: 0.55, metalness: 0.1 }),
   );
+  // faults on the arms themselves: an arm that failed for good turns grey
+  // with a dark red glow; any other fault of an arm flashes it red (1 s, or
+  // as long as the fault lasts)
+  const failedAt = data.arms.map(() => Infinity);
+  const flashes = data.arms.map(() => []);
+  for (const f of data.faults) {
+    if (f.arm < 0) continue;
+    if (f.kind === "arm_failure") failedAt[f.arm] = Math.min(failedAt[f.arm], f.time);
+    else flashes[f.arm].push([f.time, Math.max(f.end, f.time + 1.0)]);
+  }
+  const grey = new THREE.Color(0x8c8c8c);
+  const faultRed = new THREE.Color(0xd62728);
+  function faultsAt(t) {
+    armMaterial.forEach((m, a) => {
+      m.color.copy(armColour[a]);
+      m.emissive.set(0x000000);
+      if (t >= failedAt[a]) {
+        m.color.copy(grey);
+        m.emissive.set(0x4a0000);
+      } else if (flashes[a].some(([s, e]) => s <= t && t < e)) {
+        m.color.copy(faultRed);
+        m.emissive.set(0x400000);
+      }
+    });
+  }
   const geometries = new Map();
   const bodies = [];
   for (const b of data.bodies) {
@@ -438,6 +463,7 @@ async function main() {
     now = Math.min(Math.max(t, 0), T);
     poseAt(now);
     zonesAt(now);
+    faultsAt(now);
     drawGantt(now);
     statusAt(now);
     slider.value = String(now);
