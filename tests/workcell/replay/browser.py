@@ -102,7 +102,7 @@ def main(argv: list[str]) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         page_path = write_html(run, cc, Path(tmp) / "replay.html")
         with open_page(page_path, 1100, 760) as page:
-            page.locator("#time").fill("31")
+            page.locator("#time").fill("64")
             page.screenshot(path=str(out))
     print(out)
     return 0

@@ -431,6 +431,7 @@ async function main() {
       const task = data.tasks.find((x) => x.arm === k && x.start <= t && t < x.end);
       const wait = intervals.find((s) => s.arm === k && s.state === "waiting" && s.start <= t && t < s.end);
       let what = task ? task.task : "idle";
+      if (t >= failedAt[k]) what = `failed at ${failedAt[k].toFixed(2)} s`;
       if (wait) what += ` (waiting for ${data.zones[wait.zone] ? data.zones[wait.zone].name : wait.name})`;
       return `<span style="color:${a.colour}">&#9632;</span> ${a.name}: ${what}`;
     });
