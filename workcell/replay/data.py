@@ -493,7 +493,7 @@ def _zone_states(
                 "zone": zone(str(row["resource"])),
                 "state": "moving" if kind == "move" else "occupied",
                 "arm": arm_index[arm],
-                "task": "" if row["task"] is None else str(row["task"]),
+                "task": row["task"] if isinstance(row["task"], str) else "",
                 "start": s,
                 "end": duration if e is None else e,
             }
