@@ -264,12 +264,6 @@ class ReplayData:
         self.to_json(p)
         return p
 
-    def to_html(self) -> str:
-        """The self-contained page (:func:`workcell.replay.page.render_html`)."""
-        from workcell.replay.page import render_html
-
-        return render_html(self)
-
 
 _REQUIRED: dict[str, type | tuple[type, ...]] = {
     "format": str,
