@@ -9,7 +9,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 PYTEST_ARGS ?=
 
-.PHONY: demo test lint lock bench fuzz docs clean
+.PHONY: demo test lint lock bench fuzz docs clean replay-js
 
 $(STAMP): pyproject.toml constraints.txt
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' \
@@ -46,6 +46,15 @@ fuzz: $(STAMP)
 # The documentation site (mkdocs.yml) into site/, warnings as errors.
 docs: $(STAMP)
 	$(BIN)/mkdocs build --strict
+
+# The replay's viewer script (workcell/replay/static/replay.js, committed so that
+# an install needs no Node.js): three.js and the page's code (workcell/replay/web/src)
+# bundled by esbuild, both pinned by workcell/replay/web/package-lock.json. Run it
+# after editing the viewer or bumping three; CI checks the committed file is its output.
+REPLAY_WEB := workcell/replay/web
+replay-js:
+	cd $(REPLAY_WEB) && npm ci --no-audit --no-fund && npm run build
+	cp $(REPLAY_WEB)/node_modules/three/LICENSE workcell/replay/static/three-LICENSE.txt
 
 # Re-resolve every dependency and rewrite the lock (constraints.txt).
 lock:

@@ -58,6 +58,7 @@ def test_cell_file_example_in_docs_loads() -> None:
         "simulation.md",
         "plots.md",
         "cli.md",
+        "replay.md",
         "README",
     ],
 )

@@ -128,8 +128,12 @@ RUN_FILES: tuple[str, ...] = (
     "gantt.png",
     "zones.png",
     "instants.png",
+    "replay.json",
+    "replay.html",
 )
-"""The files :func:`write_run` writes into a run's directory (and ``frames/``)."""
+"""The files :func:`write_run` writes into a run's directory (and ``frames/``):
+the records, the plots, and the 3D replay (:mod:`workcell.replay`; ``multiarm
+view DIR`` rebuilds the page from ``replay.json``)."""
 
 StepCallback = Callable[[str, str], None]
 """``progress(step, detail)``: called as each step of the pipeline begins
@@ -694,6 +698,7 @@ def write_run(
     """
     import numpy as np
 
+    from workcell.replay import build_replay, write_html
     from workcell.viz.plots import gantt, motion_frames, render_instants, zone_timeline
 
     _check_frames(frames)
@@ -711,6 +716,9 @@ def write_run(
     times = np.round(np.linspace(0.0, end, 5)[1:4], 1)
     fig = render_instants(compiled, sim, [0.0, *times.tolist()])
     fig.savefig(where / "instants.png", dpi=90)
+    replay = build_replay(sim, compiled)
+    replay.save(where)  # replay.json: 'multiarm view DIR' rebuilds the page from it
+    write_html(replay, None, where / "replay.html")
     written = [where / n for n in RUN_FILES]
     if frames:
         written += motion_frames(compiled, sim, where / "frames", n_frames=frames)

@@ -21,6 +21,8 @@ OUTPUTS = (
     "gantt.png",
     "zones.png",
     "instants.png",
+    "replay.json",
+    "replay.html",
 )
 
 
@@ -58,6 +60,12 @@ def test_simulate_writes_every_output_and_prints_the_table(
     assert metrics["summary"]["failed_tasks"] == 0
     trace = json.loads((out / "trace.json").read_text())
     assert trace["format"] == "multiarm.trace/1" and trace["events"]
+    # the 3D replay (issue 19): the page is written, and 'view' rebuilds it from replay.json
+    assert json.loads((out / "replay.json").read_text())["format"] == "multiarm.replay/1"
+    page = out / "again.html"
+    assert main(["view", str(out), "--out", str(page)]) == 0
+    assert page.read_text().startswith("<!DOCTYPE html>")
+    assert page.stat().st_size > 100_000  # the viewer script is inside: the page works offline
     schedule = json.loads((out / "schedule.json").read_text())
     assert len(schedule["tasks"]) == 10
     # the table's planned makespan is the plan written out

@@ -423,7 +423,7 @@ def test_consecutive_tasks_have_visible_boundaries(planned: tuple[CompiledCell, 
 def test_each_fault_kind_has_its_own_mark_and_the_legend_explains_all(
     faulty: tuple[CompiledCell, Schedule, Any],
 ) -> None:
-    from workcell.viz.style import FAULT_MARKS
+    from workcell.style import FAULT_MARKS
 
     cc, s, run = faulty
     fig = gantt(cc, s, run)
@@ -479,7 +479,7 @@ def test_each_fault_kind_has_its_own_mark_and_the_legend_explains_all(
 def test_every_fault_record_of_a_run_is_classified(
     faulty: tuple[CompiledCell, Schedule, Any],
 ) -> None:
-    from workcell.viz.style import fault_kind
+    from workcell.style import fault_kind
 
     _, _, run = faulty
     found = {}

@@ -14,7 +14,7 @@ from collections.abc import Callable, Sequence
 from types import ModuleType
 
 from multiarm import MultiarmError, __version__
-from workcell.cli import bench, campaign, check, demo, schedule, simulate, sweep
+from workcell.cli import bench, campaign, check, demo, schedule, simulate, sweep, view
 from workcell.cli.output import EXIT_ERROR, EXIT_INTERRUPTED
 
 __all__ = ["COMMANDS", "DefaultsFormatter", "build_parser", "main"]
@@ -30,8 +30,11 @@ COMMANDS: tuple[tuple[str, str, ModuleType], ...] = (
         "compile, schedule and simulate a cell (a .toml cell file or a built-in cell's name)",
         simulate,
     ),
-    # "view" (the 3D HTML replay of a run directory) goes here: workcell.replay
-    # provides add_arguments(parser) and run(args) -> int, like the modules listed.
+    (
+        "view",
+        "write the 3D replay page (one self-contained HTML file) of a run directory",
+        view,
+    ),
     (
         "check",
         "validate .tdl/.sdl/task-set/problem/schedule files; explain cell files (.toml)",

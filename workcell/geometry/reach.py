@@ -30,6 +30,7 @@ Examples
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 
 import numpy as np
@@ -41,7 +42,15 @@ from workcell.geometry.zone_sweep import _runs, _segments, _shape_capsules
 from zones.geometry import AABox
 from zones.model import Zone, ZoneMap
 
-__all__ = ["arm_capsules", "block_name", "capsules_box", "shared_blocks", "windows_from_flags"]
+__all__ = [
+    "arm_capsules",
+    "block_bounds",
+    "block_name",
+    "capsules_box",
+    "grid_block",
+    "shared_blocks",
+    "windows_from_flags",
+]
 
 MAX_BLOCKS = 20_000
 """Refuse grids with more blocks than this (a block size far too small for the cell)."""
@@ -88,6 +97,58 @@ def block_name(x: int, y: int, z: int) -> str:
     'grid_3_m1_0'
     """
     return f"grid_{x}_{y}_{z}".replace("-", "m")
+
+
+_BLOCK = re.compile(r"grid_(m?\d+)_(m?\d+)_(m?\d+)")
+
+Point = tuple[float, float, float]
+
+
+def grid_block(name: str) -> tuple[int, int, int] | None:
+    """The grid index ``(x, y, z)`` of a space-grid zone's name, None for any other zone.
+
+    The inverse of :func:`workcell.geometry.reach.block_name` (``m`` is a minus sign).
+    """
+    m = _BLOCK.fullmatch(str(name))
+    if m is None:
+        return None
+    x, y, z = (int(g.replace("m", "-")) for g in m.groups())
+    return x, y, z
+
+
+def _grid_size(size: float | None) -> float:
+    if size is None:
+        from workcell.compiled import SPACE_GRID
+
+        return float(SPACE_GRID)
+    if not (math.isfinite(size) and size > 0):
+        raise ValidationError(f"space grid: block size must be > 0 m, got {size}")
+    return float(size)
+
+
+def block_bounds(name: str, size: float | None = None) -> tuple[Point, Point]:
+    """Lower and upper corner (metres) of a space-grid block.
+
+    Parameters
+    ----------
+    name : str
+        ``grid_X_Y_Z``.
+    size : float, optional
+        Block side, metres (default :data:`workcell.compiled.SPACE_GRID`,
+        the compile's; the grid is aligned with the origin).
+
+    Raises
+    ------
+    multiarm.errors.ValidationError
+        When ``name`` is not a space-grid block's.
+    """
+    idx = grid_block(name)
+    if idx is None:
+        raise ValidationError(f"{name!r} is not a space-grid block (grid_X_Y_Z)")
+    s = _grid_size(size)
+    lo = tuple(float(round(i * s, 9)) for i in idx)
+    hi = tuple(float(round((i + 1) * s, 9)) for i in idx)
+    return lo, hi  # type: ignore[return-value]
 
 
 def shared_blocks(boxes: Sequence[FloatArray], size: float) -> ZoneMap:

@@ -4,11 +4,12 @@ Never imported by the geometry or the simulation (DESIGN.md): plotting is a
 leaf. Arms are drawn from their collision shapes, zones from their solids.
 :mod:`workcell.viz.plots` draws schedules and simulation runs: Gantt charts
 (planned vs executed), zone occupancy, the cell at chosen instants and
-motion frames, joint curves. :mod:`workcell.viz.style` keeps one look
+motion frames, joint curves. :mod:`workcell.style` keeps one look
 across them (an arm's colour, a fault's marker); :mod:`workcell.viz.waits`
 locates the space-grid blocks and summarises a run's waits by zone.
 """
 
+from workcell.style import arm_colours
 from workcell.viz.plots import (
     arm_joints,
     gantt,
@@ -18,7 +19,6 @@ from workcell.viz.plots import (
     zone_timeline,
 )
 from workcell.viz.scene import cell_scene, export_glb, render_png
-from workcell.viz.style import arm_colours
 from workcell.viz.waits import ZoneWait, space_grid_table, wait_summary
 
 __all__ = [

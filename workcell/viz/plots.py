@@ -12,10 +12,10 @@
 * :func:`arm_joints` -- every arm's joint vector at given times (what the
   pictures of the cell draw).
 
-One look throughout (:mod:`workcell.viz.style`): an arm has the same colour
+One look throughout (:mod:`workcell.style`): an arm has the same colour
 in every plot of a run, keyed by its name in the problem's arm order
-(:func:`~workcell.viz.style.arm_colours`); a fault has the marker of its
-kind (:data:`~workcell.viz.style.FAULT_MARKS`); the compile's space-grid
+(:func:`~workcell.style.arm_colours`); a fault has the marker of its
+kind (:data:`~workcell.style.FAULT_MARKS`); the compile's space-grid
 zones share one lane, ``space grid (N blocks)`` (their coordinates:
 :mod:`workcell.viz.waits`); axes carry their units (s, m, rad).
 
@@ -63,7 +63,7 @@ import numpy as np
 from multiarm.errors import UsageError, ValidationError
 from multiarm.types import FloatArray
 from scheduler.schedule import Reservation, Schedule
-from workcell.viz.style import FAULT_MARKS, arm_colours, arm_order, fault_kind
+from workcell.style import FAULT_MARKS, arm_colours, arm_order, fault_kind
 from workcell.viz.waits import grid_block, grid_lane_label
 
 if TYPE_CHECKING:
@@ -310,14 +310,14 @@ def gantt(
     blocks)`` for all the compile's space-grid zones
     (:mod:`workcell.viz.waits` gives their coordinates), and one per tool.
 
-    Every bar has its arm's colour (:func:`workcell.viz.style.arm_colours`,
+    Every bar has its arm's colour (:func:`workcell.style.arm_colours`,
     the same in every plot of the run) and a dark edge line, so consecutive
     tasks of one arm never merge; task bars carry the task's name where it
     fits (:class:`workcell.viz.barlabel.BarLabel`). Waits at zone borders are
     hatched inside the planned bars. With ``executed``, each lane is split:
     the plan on top in a light shade, what ran beneath in the full colour,
     failed tasks red and hatched; each fault of the run is a mark of its
-    kind (:data:`workcell.viz.style.FAULT_MARKS`) on its arm's lane (or the
+    kind (:data:`workcell.style.FAULT_MARKS`) on its arm's lane (or the
     ``whole cell`` lane), an emergency stop also shades the time every arm
     stood. A dashed line marks the planned makespan, a dotted one the
     executed makespan. The legend names every colour, shade, hatch, mark
@@ -617,7 +617,7 @@ def zone_timeline(
         ``reservations_frame()``.
     arms : Problem, CompiledCell, or sequence of arm names, optional
         The arms in the problem's order, which fixes their colours
-        (:func:`workcell.viz.style.arm_colours`) and names the space grid's
+        (:func:`workcell.style.arm_colours`) and names the space grid's
         block count. Default: the run's ``problem`` when ``reservations``
         is a run, else the arms in order of appearance (colours then match
         the other plots only if that is the problem's order).
@@ -1005,7 +1005,7 @@ def render_instants(
     -------
     matplotlib.figure.Figure
         One Axes per instant, titled with its time, axes in metres; arms in
-        their colours (:func:`workcell.viz.style.arm_colours`) and
+        their colours (:func:`workcell.style.arm_colours`) and
         labelled, zones translucent (red: exclusive, blue: shared) and
         labelled; every panel's limits hold every zone and every link at
         every instant drawn (nothing clipped), and one legend below the
@@ -1134,7 +1134,7 @@ def joint_timeline(
 
     One row of panels per arm, one column per kind of joint (prismatic
     joints in metres, revolute joints in radians); an arm's curves have its
-    colour (:func:`workcell.viz.style.arm_colours`) and one line style per
+    colour (:func:`workcell.style.arm_colours`) and one line style per
     joint, named in the panel's legend.
 
     Parameters
