@@ -33,7 +33,8 @@ from workcell.compile import (
 )
 from workcell.compiled import CompiledMode, CompileOptions
 from workcell.oracle import CellOracle
-from workcell.sim.faults import (
+from workcell.sim.comms.dcr import dcr_bound
+from workcell.sim.harness.faults import (
     ActivateZones,
     ArmFailure,
     Crash,
@@ -43,9 +44,8 @@ from workcell.sim.faults import (
     LostSync,
     MessageLoss,
 )
-from workcell.sim.network.dcr import dcr_bound
-from workcell.sim.options import SimOptions
-from workcell.sim.run import SimResult, simulate
+from workcell.sim.harness.options import SimOptions
+from workcell.sim.harness.simulate import SimResult, simulate
 
 __all__ = [
     "EXAMPLES",

@@ -31,8 +31,8 @@ from workcell.campaign import (
 )
 from workcell.cli import main
 from workcell.experiments import parse_sweep
-from workcell.sim.faults import ArmFailure, FaultPlan, LatePart
-from workcell.sim.network import MEDIA
+from workcell.sim.comms import MEDIA
+from workcell.sim.harness.faults import ArmFailure, FaultPlan, LatePart
 
 SMALL = ("supersigma", "scara4")
 

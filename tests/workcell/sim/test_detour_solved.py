@@ -31,8 +31,8 @@ from scheduler import solve
 from workcell import compile_cell, simulate
 from workcell.cell import load_cell
 from workcell.geometry import check_path, plan_detour
-from workcell.sim.monitor import SafetyMonitor
-from workcell.sim.trace import Trace
+from workcell.sim.events.trace import Trace
+from workcell.sim.harness.monitor import SafetyMonitor
 
 POLE = """
 [arms.pole]
@@ -64,7 +64,7 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         found.append((args, kwargs, res))
         return res
 
-    mp.setattr("workcell.sim.coordinator.plan_detour", spy)
+    mp.setattr("workcell.sim.coordination.centralized.plan_detour", spy)
     try:
         result = simulate(cc, plan, seed=0)  # the live safety monitor is on
     finally:

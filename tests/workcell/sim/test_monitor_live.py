@@ -1,4 +1,4 @@
-"""The live safety monitor (workcell.sim.monitor.LiveMonitor; S2.5-S2.7, S2.12).
+"""The live safety monitor (workcell.sim.harness.monitor.LiveMonitor; S2.5-S2.7, S2.12).
 
 It runs inside the simulation as a kernel process and stops the run at the
 first violating sample; the post-run check (``monitor="post"``) reads the
@@ -21,7 +21,7 @@ from scheduler import Schedule, solve
 from workcell import SimOptions, compile_cell, load_example, simulate
 from workcell.geometry import CollisionWorld
 from workcell.sim import EmergencyStop
-from workcell.sim.monitor import SafetyMonitor, SafetyViolation, _segment_dist2
+from workcell.sim.harness.monitor import SafetyMonitor, SafetyViolation, _segment_dist2
 
 PERIOD = 0.02
 

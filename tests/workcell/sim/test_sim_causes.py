@@ -35,7 +35,7 @@ from workcell.sim import (
     SimOptions,
     simulate,
 )
-from workcell.sim.coordinator import CAUSE_KINDS
+from workcell.sim.coordination.centralized import CAUSE_KINDS
 
 UNEXPLAINED = "not completed when the simulation ended"
 

@@ -136,7 +136,7 @@ def test_a_failed_arm_is_passed_to_the_re_solve_as_failed(
     """Every task has a working arm: the failed arm goes to the re-solve as
     failed (it gets no task; it used to be an arm busy until far in the
     future, which let the search put tasks after that), and nothing fails."""
-    import workcell.sim.coordinator as coordinator
+    import workcell.sim.coordination.centralized as coordinator
 
     states: list[Any] = []
     real = coordinator.reschedule
@@ -163,7 +163,7 @@ def test_a_re_solve_never_drops_a_task_a_working_arm_can_do(
     forced here) is replaced by the warm start decoded."""
     import dataclasses
 
-    import workcell.sim.coordinator as coordinator
+    import workcell.sim.coordination.centralized as coordinator
 
     p = cell.problem
     left = p.arm_names.index("left")

@@ -43,7 +43,7 @@ pauses of the trajectory clock at the stopping point.
 Force sensing (S1.7, S1.2)
 --------------------------
 Each controller has the arm's wrist force sensor
-(:class:`~workcell.sim.force.ForceSensor`) and its two commands,
+(:class:`~workcell.sim.control.force.ForceSensor`) and its two commands,
 :meth:`ArmController.read_force` and :meth:`ArmController.set_thresholds`.
 A crash above the threshold in force stops the motors at once (``STOP_D``,
 the reflex arc) and is reported to the coordinator afterwards
@@ -76,9 +76,15 @@ from multiarm.errors import ValidationError
 from multiarm.types import FloatArray, JointVector
 from workcell.arms import DriveArm, JointTrajectory
 from workcell.arms.profiles import Drive, ServoDrive, StepperDrive
-from workcell.sim.force import CRASH_AXIS, CRASH_FORCE, FREE_THRESHOLD, ForceSensor, InsertSearch
-from workcell.sim.kernel import Handle, Kernel
-from workcell.sim.trace import Trace
+from workcell.sim.control.force import (
+    CRASH_AXIS,
+    CRASH_FORCE,
+    FREE_THRESHOLD,
+    ForceSensor,
+    InsertSearch,
+)
+from workcell.sim.events.loop import EventLoop, Handle
+from workcell.sim.events.trace import Trace
 
 __all__ = [
     "INTERNAL_MESSAGES",
@@ -226,7 +232,7 @@ class Leg:
         Sorted by ``tau``; the last one is the end.
     searches : tuple of InsertSearch
         The force-guided searches of a task leg whose insertion tries are
-        drawn (:mod:`workcell.sim.force`); empty otherwise.
+        drawn (:mod:`workcell.sim.control.force`); empty otherwise.
     marks : list of Mark, or None
         The searches' events on the leg's clock (built when the leg starts).
     fired : int
@@ -253,12 +259,12 @@ class Ticker:
 
     Parameters
     ----------
-    kernel : Kernel
+    kernel : EventLoop
     period : float
         Seconds.
     """
 
-    def __init__(self, kernel: Kernel, period: float) -> None:
+    def __init__(self, kernel: EventLoop, period: float) -> None:
         self.kernel = kernel
         self.period = float(period)
         self.arms: list[ArmController] = []
@@ -296,7 +302,7 @@ class ArmController:
 
     Parameters
     ----------
-    kernel : Kernel
+    kernel : EventLoop
     index : int
         Arm id (its station on the medium is ``index + 1``).
     arm : DriveArm
@@ -316,16 +322,16 @@ class ArmController:
     Attributes
     ----------
     sensor : ForceSensor
-        The wrist force sensor (:mod:`workcell.sim.force`).
+        The wrist force sensor (:mod:`workcell.sim.control.force`).
     searches : dict of int -> tuple of InsertSearch
         Per compiled mode, its insert steps' searches with the tries drawn
-        (set by :func:`~workcell.sim.run.simulate` with
+        (set by :func:`~workcell.sim.harness.simulate.simulate` with
         ``insertion="drawn"``; empty: every insertion takes its planned time).
     """
 
     def __init__(
         self,
-        kernel: Kernel,
+        kernel: EventLoop,
         index: int,
         arm: DriveArm,
         q0: JointVector,

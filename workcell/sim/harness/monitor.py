@@ -79,20 +79,20 @@ from multiarm.types import FloatArray
 from scheduler import Problem
 from workcell.compile import CompiledCell
 from workcell.geometry import CollisionWorld
-from workcell.sim.controller import ArmController, Leg
-from workcell.sim.kernel import Kernel
-from workcell.sim.trace import Trace
+from workcell.sim.control.controller import ArmController, Leg
+from workcell.sim.events.loop import EventLoop
+from workcell.sim.events.trace import Trace
 
 __all__ = ["MONITOR_PRIORITY", "LiveMonitor", "SafetyMonitor", "SafetyViolation"]
 
 MONITOR_PRIORITY = 1 << 30
-"""Kernel priority of the live monitor's wakes: after every other callback
+"""EventLoop priority of the live monitor's wakes: after every other callback
 due at the same instant, so a sample sees the state the post-run records
 give for that instant."""
 
 Record = tuple[float, float, Leg | None, float, bool, FloatArray]
 """One row of an arm's motion record: ``(t0, t1, leg, tau0, moving, extra)``
-(see :class:`~workcell.sim.controller.ArmController`)."""
+(see :class:`~workcell.sim.control.controller.ArmController`)."""
 
 Use = tuple[tuple[str, str], float, float]
 """One use of a resource: ``((what, name), start, end)``."""
@@ -608,7 +608,7 @@ class LiveMonitor:
     """The safety monitor as a kernel process: checks while the run goes on.
 
     Call :meth:`start` before running the kernel. A violation raises
-    :class:`SafetyViolation` out of :meth:`Kernel.run <workcell.sim.kernel.Kernel.run>`
+    :class:`SafetyViolation` out of :meth:`EventLoop.run <workcell.sim.events.loop.EventLoop.run>`
     at the first violating sample, with a ``"monitor"`` event at that time
     in the trace and the partial trace on the exception. What it samples and
     what it skips: module docstring.
@@ -616,7 +616,7 @@ class LiveMonitor:
     Parameters
     ----------
     compiled : CompiledCell
-    kernel : Kernel
+    kernel : EventLoop
     arms : sequence of ArmController
         Read only for their motion records, the segment in progress and
         their task records (never the coordinator, plan or zone manager).
@@ -636,7 +636,7 @@ class LiveMonitor:
     samples : int
         Collision samples taken.
     wakes : int
-        Kernel callbacks of the monitor (samples, events while no arm moves,
+        EventLoop callbacks of the monitor (samples, events while no arm moves,
         predicted overlaps).
     pair_tests : int
         Arm pairs put to the bounding-sphere test.
@@ -645,7 +645,7 @@ class LiveMonitor:
     def __init__(
         self,
         compiled: CompiledCell,
-        kernel: Kernel,
+        kernel: EventLoop,
         arms: Sequence[ArmController],
         trace: Trace,
         period: float = 0.02,

@@ -39,8 +39,8 @@ The coordinator executes a :class:`scheduler.Schedule`:
   arm's zones and tools are given back, its interrupted and remaining tasks
   reassigned), crashes reported after the reflex stop (S1.2).
 
-Every coordinator-arm message is a :class:`~workcell.sim.medium.Frame` of
-the S2.9 size (:data:`~workcell.sim.medium.MESSAGE_BYTES`) through the
+Every coordinator-arm message is a :class:`~workcell.sim.comms.medium.Frame` of
+the S2.9 size (:data:`~workcell.sim.comms.medium.MESSAGE_BYTES`) through the
 medium; a lost or dropped frame is sent again after a timeout.
 """
 
@@ -64,11 +64,11 @@ from workcell.compile import CompiledCell
 from workcell.geometry import CollisionWorld, ObstacleSet, plan_detour
 from workcell.geometry._sweep_jit import capsules_touch
 from workcell.geometry.sweep import _segment_distances, _segments, _shape_capsules
-from workcell.sim.controller import ArmController, Leg, Piece, Station
-from workcell.sim.faults import MessageLoss
-from workcell.sim.kernel import Handle, Kernel
-from workcell.sim.medium import BROADCAST, MESSAGE_BYTES, Frame, Medium, trajectory_bytes
-from workcell.sim.trace import Trace
+from workcell.sim.comms.medium import BROADCAST, MESSAGE_BYTES, Frame, Medium, trajectory_bytes
+from workcell.sim.control.controller import ArmController, Leg, Piece, Station
+from workcell.sim.events.loop import EventLoop, Handle
+from workcell.sim.events.trace import Trace
+from workcell.sim.harness.faults import MessageLoss
 from zones import ZoneManager
 from zones.manager import Deadlock, ReportOnly, Wake
 
@@ -99,7 +99,7 @@ class Network:
 
     Parameters
     ----------
-    kernel : Kernel
+    kernel : EventLoop
     medium : Medium
     trace : Trace
     names : sequence of str
@@ -110,7 +110,7 @@ class Network:
 
     def __init__(
         self,
-        kernel: Kernel,
+        kernel: EventLoop,
         medium: Medium,
         trace: Trace,
         names: list[str],
@@ -451,7 +451,7 @@ class Coordinator:
     ----------
     compiled : CompiledCell
     plan : Schedule
-    kernel : Kernel
+    kernel : EventLoop
     net : Network
     trace : Trace
     arms : list of ArmController
@@ -474,7 +474,7 @@ class Coordinator:
         self,
         compiled: CompiledCell,
         plan: Schedule,
-        kernel: Kernel,
+        kernel: EventLoop,
         net: Network,
         trace: Trace,
         arms: list[ArmController],
