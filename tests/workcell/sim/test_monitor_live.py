@@ -77,7 +77,7 @@ def _first_contact_by_fcl_alone(cc: Any, run: Any, until: float) -> float:
     times = np.arange(math.floor(until / PERIOD) + 1, dtype=np.float64) * PERIOD
     tfs = [
         arm.shape_transforms(SafetyMonitor.joints(c, times))
-        for arm, c in zip(cc.cell.arms, run._arms, strict=True)
+        for arm, c in zip(cc.cell.arms, run.arm_logs, strict=True)
     ]
     names = [arm.name for arm in cc.cell.arms]
     for i, t in enumerate(times):
@@ -138,14 +138,14 @@ def test_nominal_runs_pass_and_the_monitor_does_not_change_them(name: str) -> No
 
 def _moving_samples(result: Any, period: float) -> int:
     """Grid instants ``k * period`` at which some arm is moving (from the records)."""
-    t_end = max(rec[1] for c in result._arms for rec in c.motion)
+    t_end = max(rec.end for c in result.arm_logs for rec in c.records)
     k = np.arange(math.ceil(t_end / period) + 1)
     t = k * period
     moving = np.zeros(len(t), dtype=bool)
-    for c in result._arms:
-        for t0, t1, leg, _tau, run, _x in c.motion:
-            if leg is not None and run:
-                moving |= (t >= t0) & (t < t1)
+    for c in result.arm_logs:
+        for rec in c.records:
+            if rec.leg is not None and rec.moving:
+                moving |= (t >= rec.start) & (t < rec.end)
     return int(moving.sum())
 
 
@@ -157,10 +157,10 @@ def test_idle_stretches_cost_no_samples(supersigma: Any) -> None:
     r = simulate(supersigma, plan, seed=0, faults=[EmergencyStop(20.0, 200.0)])
     mon = r.monitor
     assert mon is not None
-    t_end = max(rec[1] for c in r._arms for rec in c.motion)
+    t_end = max(rec.end for c in r.arm_logs for rec in c.records)
     grid = math.ceil(t_end / PERIOD) + 1
     moving = _moving_samples(r, PERIOD)
-    records = sum(len(c.motion) for c in r._arms)
+    records = sum(len(c.records) for c in r.arm_logs)
     assert moving <= mon.samples <= moving + records + 1
     assert mon.samples < grid - 200.0 / PERIOD  # the stop cost no sample
     assert mon.wakes < mon.samples + 2 * r.metrics.events  # at most one wake per event

@@ -67,7 +67,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -85,14 +85,12 @@ from workcell.sim.control.force import (
 )
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
+from workcell.sim.protocol.messages import Leg, Mark, Piece, Station
+from workcell.sim.protocol.records import MotionLog, MotionRecord, TaskRecord
 
 __all__ = [
     "INTERNAL_MESSAGES",
     "ArmController",
-    "Leg",
-    "Mark",
-    "Piece",
-    "Station",
     "Ticker",
     "pipeline_offset",
     "stop_time",
@@ -108,18 +106,8 @@ INTERNAL_MESSAGES: tuple[str, ...] = (
 )
 """The six messages between an arm's two processors (S2.3)."""
 
-Mark = tuple[float, str, int, int]
-"""A force-search event on a task leg's clock: ``(tau, action, search, try)``
-with action ``"raise"`` (the thresholds, at the start of the search dwell)
-or ``"try"`` (the end of try ``try``, 1-based)."""
-
 _EPS = 1e-9
 """Seconds: marks this close to a station belong to it."""
-
-Piece = tuple[str, int, int, float]
-"""One use of a resource by a task: ``(kind, index, task, tau)`` with kind
-``"zone"`` (an exclusive zone's occupancy), ``"move"`` (movement in a shared
-zone) or ``"tool"``; ``tau`` is the offset in the task where it starts."""
 
 
 def stop_time(drive: Drive) -> float:
@@ -177,80 +165,11 @@ def _marks(searches: Sequence[InsertSearch]) -> list[Mark]:
     out: list[Mark] = []
     for si, s in enumerate(searches):
         T = s.search.try_time
-        out.append((s.start, "raise", si, 0))
+        out.append(Mark(s.start, "raise", si, 0))
         base = max(0, s.tries - s.planned)
         for j in range(1, min(s.tries, s.planned) + 1):
-            out.append((s.start + j * T, "try", si, base + j))
+            out.append(Mark(s.start + j * T, "try", si, base + j))
     return out
-
-
-@dataclass(slots=True)
-class Station:
-    """A point of a leg where something happens.
-
-    Attributes
-    ----------
-    tau : float
-        Offset in the leg, seconds.
-    notbefore : float
-        The arm may not pass before this absolute time (the plan's time).
-    acquire : list of Piece
-        Resources needed to pass (granted by the coordinator).
-    release : list of Piece
-        Resources given back on arrival.
-    border : int
-        Index of the mode's border here (for the executed waits), -1 if none.
-    start : bool
-        The task's start (needs the coordinator's permission).
-    end : bool
-        The leg's end.
-    requested : bool
-        Requests for ``acquire`` sent.
-    """
-
-    tau: float
-    notbefore: float = -math.inf
-    acquire: list[Piece] = field(default_factory=list)
-    release: list[Piece] = field(default_factory=list)
-    border: int = -1
-    start: bool = False
-    end: bool = False
-    requested: bool = False
-
-
-@dataclass(slots=True)
-class Leg:
-    """A piece of work sent in one trajectory message: travel or task.
-
-    Attributes
-    ----------
-    kind : {"travel", "task"}
-    task : int
-    mode : int (-1 for travel)
-    trajectory : JointTrajectory
-    stations : list of Station
-        Sorted by ``tau``; the last one is the end.
-    searches : tuple of InsertSearch
-        The force-guided searches of a task leg whose insertion tries are
-        drawn (:mod:`workcell.sim.control.force`); empty otherwise.
-    marks : list of Mark, or None
-        The searches' events on the leg's clock (built when the leg starts).
-    fired : int
-        Marks done.
-    """
-
-    kind: str
-    task: int
-    mode: int
-    trajectory: JointTrajectory
-    stations: list[Station]
-    searches: tuple[InsertSearch, ...] = ()
-    marks: list[Mark] | None = None
-    fired: int = 0
-
-    @property
-    def duration(self) -> float:
-        return float(self.trajectory.duration)
 
 
 class Ticker:
@@ -375,11 +294,16 @@ class ArmController:
         self._request_h: Handle | None = None
         self._resume_h: Handle | None = None
         self._wait_start = 0.0
-        # executed motion: (t0, t1, leg or None, tau0, moving, q) rows
-        self.motion: list[tuple[float, float, Leg | None, float, bool, FloatArray]] = []
         self._seg_t0 = 0.0
-        # executed tasks: task -> [start, end, waits list, mode]
-        self.task_log: dict[int, list[Any]] = {}
+        self.log = MotionLog(
+            index,
+            arm.name,
+            self.home_q.copy(),
+            self._open_record,
+            self._record_state,
+            self.is_running,
+        )
+        """The published motion and task records (the monitor's only input)."""
         self.points_checked = 0
         self.zone_wait: dict[str, float] = {}
         self.border_wait = 0.0
@@ -440,15 +364,17 @@ class ArmController:
     def _close_segment(self) -> None:
         """End the current motion record at now."""
         now = self.kernel.now
-        if now > self._seg_t0 or not self.motion:
+        if now > self._seg_t0 or not self.log.records:
             leg = self.leg
             if leg is None:
-                self.motion.append((self._seg_t0, now, None, 0.0, False, self.q.copy()))
+                self.log.records.append(
+                    MotionRecord(self._seg_t0, now, None, 0.0, False, self.q.copy())
+                )
             else:
                 # progress at the record's start
                 tau0 = self.tau + (self._seg_t0 - self.t_ref) if self.running else self.tau
-                self.motion.append(
-                    (self._seg_t0, now, leg, tau0, self.running, self.sync_error.copy())
+                self.log.records.append(
+                    MotionRecord(self._seg_t0, now, leg, tau0, self.running, self.sync_error.copy())
                 )
                 if self.running and now > self._seg_t0:
                     self.trace.add(
@@ -460,6 +386,29 @@ class ArmController:
                         detail=f"{leg.kind} from offset {tau0:.6g} s",
                     )
         self._seg_t0 = now
+
+    def _open_record(self, now: float) -> MotionRecord:
+        """The motion record in progress, as it would be closed at ``now``."""
+        leg = self.leg
+        t0 = self._seg_t0
+        if leg is None:
+            return MotionRecord(t0, now, None, 0.0, False, self.q)
+        tau0 = self.tau + (t0 - self.t_ref) if self.running else self.tau
+        return MotionRecord(t0, now, leg, tau0, self.running, self.sync_error)
+
+    def is_running(self) -> bool:
+        """The trajectory clock runs."""
+        return self.running
+
+    def _record_state(self) -> tuple[Any, ...]:
+        """What the record in progress depends on (equal: the same record)."""
+        leg = self.leg
+        n = len(self.log.tasks)
+        if leg is None:
+            return (self._seg_t0, 0, False, 0.0, n, self.failed, self.q.tobytes())
+        running = self.running
+        tau0 = self.tau + (self._seg_t0 - self.t_ref) if running else self.tau
+        return (self._seg_t0, id(leg), running, tau0, n, self.failed, self.sync_error.tobytes())
 
     def _cancel(self) -> None:
         for h in (self._arrive_h, self._request_h, self._resume_h, self._mark_h):
@@ -581,10 +530,8 @@ class ArmController:
         if st.acquire and not st.requested:
             self._send_requests(st)
         now = self.kernel.now
-        blocked = [p for p in st.acquire if p not in self.granted]
-        if st.start and leg.task not in self.permit:
-            blocked.append(("start", -1, leg.task, 0.0))
-        if blocked:
+        blocked = any(p not in self.granted for p in st.acquire)
+        if blocked or (st.start and leg.task not in self.permit):
             return  # a grant, wake-up or permission will call us again
         if st.notbefore > now:
             if self._resume_h is None:
@@ -622,12 +569,12 @@ class ArmController:
         waited = now - self._wait_start
         self.at_station = False
         if st.start:
-            self.task_log[leg.task] = [now, math.nan, [], leg.mode]
+            self.log.tasks[leg.task] = TaskRecord(leg.task, leg.mode, now)
             self.on_task_start(self.index, leg.task, now)
         if st.border >= 0:
-            log = self.task_log.get(leg.task)
+            log = self.log.tasks.get(leg.task)
             if log is not None:
-                log[2].append((st.border, waited))
+                self.log.tasks[leg.task] = replace(log, waits=(*log.waits, (st.border, waited)))
         if st.acquire and waited > 0:
             self.border_wait += waited  # once per stop, however many resources it waited for
         for piece in st.acquire:
@@ -665,9 +612,9 @@ class ArmController:
         self.q = leg.trajectory.q_end.copy()
         if leg.kind == "task":
             self.internal("TRAJECTORY_END", leg.task)
-            log = self.task_log.get(leg.task)
+            log = self.log.tasks.get(leg.task)
             if log is not None:
-                log[1] = now
+                self.log.tasks[leg.task] = replace(log, end=now)
             self.pose_task = leg.task
             if self._search_failure(leg) is None:
                 self.on_task_end(self.index, leg.task, now)
@@ -786,7 +733,7 @@ class ArmController:
 
     def _withdraw(self, t: int) -> None:
         """Drop the not yet started task ``t`` (the plan changed)."""
-        if t in self.task_log:
+        if t in self.log.tasks:
             return
         if self.leg is not None and self.leg.task == t:
             self._pause("withdraw")
@@ -996,7 +943,7 @@ class ArmController:
         """The cause when a search of the task leg never found its hole."""
         for s in leg.searches:
             if not s.found:
-                return s.cause
+                return str(s.cause)
         return None
 
     def _plan_mark(self) -> None:
@@ -1008,7 +955,7 @@ class ArmController:
         leg = self.leg
         if leg is None or not self.running or not leg.marks or leg.fired >= len(leg.marks):
             return
-        tau = leg.marks[leg.fired][0]
+        tau = leg.marks[leg.fired].tau
         if tau > leg.stations[self.k].tau + _EPS:
             return
         now = self.kernel.now
@@ -1028,7 +975,7 @@ class ArmController:
         """Do every mark of the leg due at offset ``tau``."""
         leg = self.leg
         assert leg is not None and leg.marks is not None
-        while leg.fired < len(leg.marks) and leg.marks[leg.fired][0] <= tau + _EPS:
+        while leg.fired < len(leg.marks) and leg.marks[leg.fired].tau <= tau + _EPS:
             _t, action, si, k = leg.marks[leg.fired]
             leg.fired += 1
             s = leg.searches[si]
@@ -1113,7 +1060,7 @@ class ArmController:
         self._extra = None  # a search in progress ends with the arm
         self.pushing = False
         self.failed = True
-        self.failed_at = self.kernel.now
+        self.failed_at = self.log.failed_at = self.kernel.now
         self.leg = None
         self.legs.clear()
         self.at_station = False

@@ -79,9 +79,9 @@ from multiarm.types import FloatArray
 from scheduler import Problem
 from workcell.compile import CompiledCell
 from workcell.geometry import CollisionWorld
-from workcell.sim.control.controller import ArmController, Leg
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
+from workcell.sim.protocol.records import MotionLog, MotionRecord, TaskRecord
 
 __all__ = ["MONITOR_PRIORITY", "LiveMonitor", "SafetyMonitor", "SafetyViolation"]
 
@@ -90,9 +90,9 @@ MONITOR_PRIORITY = 1 << 30
 due at the same instant, so a sample sees the state the post-run records
 give for that instant."""
 
-Record = tuple[float, float, Leg | None, float, bool, FloatArray]
-"""One row of an arm's motion record: ``(t0, t1, leg, tau0, moving, extra)``
-(see :class:`~workcell.sim.control.controller.ArmController`)."""
+Record = MotionRecord
+"""One segment of an arm's published motion
+(:class:`~workcell.sim.protocol.records.MotionRecord`)."""
 
 Use = tuple[tuple[str, str], float, float]
 """One use of a resource: ``((what, name), start, end)``."""
@@ -145,12 +145,7 @@ class SafetyViolation(MultiarmError, RuntimeError):
 
 def _record_joints(rec: Record, times: FloatArray) -> FloatArray:
     """(N, dof) actual joints at ``times`` (all within the record) from one record."""
-    t0, _t1, leg, tau0, moving, extra = rec
-    if leg is None:
-        return np.repeat(np.asarray(extra, dtype=float)[None, :], len(times), axis=0)
-    tau = tau0 + (times - t0) if moving else np.full(len(times), tau0)
-    out: FloatArray = leg.trajectory.sample(tau) + extra
-    return out
+    return rec.joints_at(times)
 
 
 class _Windows:
@@ -187,7 +182,7 @@ class _Windows:
         go on as it goes (moving or standing) until ``t_end`` (``inf``: for
         ever): the uses of a segment in progress, as predicted.
         """
-        t0, t1, leg, tau0, moving, _extra = rec
+        t0, t1, leg, tau0, moving = rec.start, rec.end, rec.leg, rec.tau0, rec.moving
         if leg is None or leg.kind != "task":
             return []
         keys, s, e, n_ex = self._mode(leg.mode)
@@ -438,16 +433,18 @@ class SafetyMonitor:
 
     # ------------------------------------------------------------ positions
     @staticmethod
-    def joints(ctl: ArmController, times: FloatArray) -> FloatArray:
+    def joints(ctl: MotionLog, times: FloatArray) -> FloatArray:
         """(N, dof) actual joints of an arm at ``times`` from its motion record."""
         out = np.repeat(ctl.home_q[None, :], len(times), axis=0)
-        for rec in ctl.motion:
-            t0, t1 = rec[0], rec[1]
+        for rec in ctl.records:
+            t0, t1 = rec.start, rec.end
             sel = np.flatnonzero((times >= t0) & (times < t1))
             if len(sel):
                 out[sel] = _record_joints(rec, times[sel])
-        if ctl.motion:  # after the last record: where it stands
-            t0, t1, leg, tau0, moving, extra = ctl.motion[-1]
+        if ctl.records:  # after the last record: where it stands
+            last = ctl.records[-1]
+            t0, t1, leg, tau0 = last.start, last.end, last.leg, last.tau0
+            moving, extra = last.moving, last.joints
             sel = np.flatnonzero(times >= t1)
             if len(sel):
                 if leg is None:
@@ -458,7 +455,7 @@ class SafetyMonitor:
         return out
 
     # ------------------------------------------------------------ checks
-    def check(self, arms: Sequence[ArmController], t_end: float, trace: Trace) -> None:
+    def check(self, arms: Sequence[MotionLog], t_end: float, trace: Trace) -> None:
         """Check the whole run up to ``t_end``; report the earliest violation.
 
         Raises
@@ -477,7 +474,7 @@ class SafetyMonitor:
         raise SafetyViolation(msg, time=t, found=t_end, arms=names, trace=trace)
 
     def _collisions(
-        self, arms: Sequence[ArmController], t_end: float, before: float = math.inf
+        self, arms: Sequence[MotionLog], t_end: float, before: float = math.inf
     ) -> tuple[float, tuple[str, str], str] | None:
         """The first sample (before ``before``) at which two arms touch, in
         time order (ties: in the order of the arm pairs)."""
@@ -543,23 +540,24 @@ class SafetyMonitor:
                 return t, (geo.names[a], geo.names[b]), geo.violation(a, b, t)
         return None
 
-    def _zones(self, arms: Sequence[ArmController]) -> tuple[float, tuple[str, str], str] | None:
+    def _zones(self, arms: Sequence[MotionLog]) -> tuple[float, tuple[str, str], str] | None:
         """The earliest overlap of two arms' uses of one resource."""
         p: Problem = self.cc.problem
         windows = _Windows(p)
         use: dict[tuple[str, str], list[tuple[float, float, str]]] = {}
         for ctl in arms:
             first_move = math.inf
-            for rec in ctl.motion:
-                if rec[2] is None:
+            for rec in ctl.records:
+                if rec.leg is None:
                     continue
-                first_move = min(first_move, rec[0])
+                first_move = min(first_move, rec.start)
                 for key, s, e in windows.uses(rec):
                     use.setdefault(key, []).append((s, e, ctl.name))
             first_move = min(first_move, ctl.failed_at)  # a failed arm is retracted
             for key, s, e in _static_uses(p, ctl, first_move):
                 use.setdefault(key, []).append((s, e, ctl.name))
-            for t, (start, end, _w, m) in ctl.task_log.items():
+            for t, task in ctl.tasks.items():
+                start, end, m = task.start, task.end, task.mode
                 if math.isfinite(end):
                     stop = end
                 elif ctl.failed:
@@ -567,7 +565,7 @@ class SafetyMonitor:
                     # to its home joints and gives its tools back at once
                     stop = max(start, ctl.failed_at)
                 else:
-                    stop = ctl.motion[-1][1] if ctl.motion else start
+                    stop = ctl.records[-1].end if ctl.records else start
                 for k in p.mode_tools[m]:
                     use.setdefault(("holding tool", p.tool_names[k]), []).append(
                         (start, stop, ctl.name)
@@ -592,7 +590,7 @@ class SafetyMonitor:
         return best
 
 
-def _static_uses(p: Problem, ctl: ArmController, first_move: float) -> list[Use]:
+def _static_uses(p: Problem, ctl: MotionLog, first_move: float) -> list[Use]:
     """The exclusive zones an arm starts in, held until it first moves."""
     out: list[Use] = []
     for z in p.arm_start_zones[ctl.index]:
@@ -617,7 +615,7 @@ class LiveMonitor:
     ----------
     compiled : CompiledCell
     kernel : EventLoop
-    arms : sequence of ArmController
+    arms : sequence of MotionLog
         Read only for their motion records, the segment in progress and
         their task records (never the coordinator, plan or zone manager).
     trace : Trace
@@ -646,7 +644,7 @@ class LiveMonitor:
         self,
         compiled: CompiledCell,
         kernel: EventLoop,
-        arms: Sequence[ArmController],
+        arms: Sequence[MotionLog],
         trace: Trace,
         period: float = 0.02,
         tol: float = 1e-6,
@@ -685,7 +683,7 @@ class LiveMonitor:
         self._first_move = [math.inf] * A
         self._start_closed = [False] * A
         self._tasks_seen = [0] * A
-        self._open_tasks: list[list[tuple[int, list[Any]]]] = [[] for _ in range(A)]
+        self._open_tasks: list[list[tuple[int, TaskRecord]]] = [[] for _ in range(A)]
         self._refresh: list[tuple[float, int, int]] = []
         # per resource, per arm: finished uses as (end, start) sorted, and the
         # uses in progress (as predicted) as (start, end)
@@ -725,7 +723,7 @@ class LiveMonitor:
         self.wakes += 1
         now = self.kernel.now
         arms = self.arms
-        keys = [_state(c) for c in arms]
+        keys = [c.state() for c in arms]
         changed = [a for a, key in enumerate(keys) if key != self._keys[a]]
         refresh = self._refresh
         while refresh and refresh[0][0] <= now:
@@ -740,7 +738,7 @@ class LiveMonitor:
             self._collisions(k, now, keys)
         if nxt == math.inf:
             return  # the run is over: nothing left to change
-        moving = any(c.running for c in arms)
+        moving = any(c.moving() for c in arms)
         settle = moving or any(self._sampled[a] != keys[a] for a in range(len(arms)))
         if settle:  # the next sample (events until then are read there)
             wake_k = self._grid_after(now)
@@ -763,12 +761,12 @@ class LiveMonitor:
             return ent[2][i], ent[3][i], ent[4][i], ent[5][i]
         ctl = self.arms[a]
         now = self.kernel.now
-        rec = _open_record(ctl, now)
+        rec = ctl.open_record(now)
         if moving and k >= 0:  # a few samples ahead, while this segment lasts
             times = np.arange(k, k + self.lookahead, dtype=float) * self.period
         else:
             times = np.array([now])
-        tfs = ctl.arm.shape_transforms(_record_joints(rec, times))
+        tfs = self.cc.cell.arms[a].shape_transforms(_record_joints(rec, times))
         centres = np.ascontiguousarray(tfs[:, :, :3, 3])
         p0, p1 = self.geo.ends(a, tfs)
         self._pos[a] = (key, k, centres, tfs, p0, p1) if k >= 0 or not moving else None
@@ -829,29 +827,30 @@ class LiveMonitor:
             self._ver[a] += 1
             ctl = self.arms[a]
             new: list[Use] = []
-            for rec in ctl.motion[self._nrec[a] :]:
-                if rec[2] is not None:
-                    self._first_move[a] = min(self._first_move[a], rec[0])
+            for rec in ctl.records[self._nrec[a] :]:
+                if rec.leg is not None:
+                    self._first_move[a] = min(self._first_move[a], rec.start)
                     new.extend(self._windows.uses(rec))
-            self._nrec[a] = len(ctl.motion)
-            rec = _open_record(ctl, now)
+            self._nrec[a] = len(ctl.records)
+            rec = ctl.open_record(now)
             current = self._windows.uses(rec, math.inf)
             if not self._start_closed[a]:
                 first = min(self._first_move[a], ctl.failed_at)
-                if rec[2] is not None:
-                    first = min(first, rec[0])
+                if rec.leg is not None:
+                    first = min(first, rec.start)
                 if math.isfinite(first):
                     new.extend(_static_uses(p, ctl, first))
                     self._start_closed[a] = True
                 else:
                     current.extend(_static_uses(p, ctl, math.inf))
-            log = ctl.task_log
+            log = ctl.tasks
             if len(log) > self._tasks_seen[a]:  # tasks started since (in start order)
                 self._open_tasks[a].extend(itertools.islice(log.items(), self._tasks_seen[a], None))
                 self._tasks_seen[a] = len(log)
             still = []
-            for t, entry in self._open_tasks[a]:
-                start, end, _w, m = entry
+            for t, _entry in self._open_tasks[a]:
+                entry = log[t]  # the record as it is now (replaced as the task goes on)
+                start, end, m = entry.start, entry.end, entry.mode
                 if math.isfinite(end) or ctl.failed:
                     stop = end if math.isfinite(end) else max(start, ctl.failed_at)
                     new.extend(
@@ -957,31 +956,3 @@ class LiveMonitor:
         self.trace.add(now, "monitor", detail=msg)
         self.trace.sort()
         raise SafetyViolation(msg, time=t, found=now, arms=names, trace=self.trace)
-
-
-def _open_record(ctl: ArmController, now: float) -> Record:
-    """The arm's motion record in progress, as it would be closed at ``now``."""
-    leg = ctl.leg
-    t0 = ctl._seg_t0
-    if leg is None:
-        return (t0, now, None, 0.0, False, ctl.q)
-    tau0 = ctl.tau + (t0 - ctl.t_ref) if ctl.running else ctl.tau
-    return (t0, now, leg, tau0, ctl.running, ctl.sync_error)
-
-
-def _state(ctl: ArmController) -> tuple[Any, ...]:
-    """What an arm's record in progress depends on (equal: the same record)."""
-    leg = ctl.leg
-    if leg is None:
-        return (ctl._seg_t0, 0, False, 0.0, len(ctl.task_log), ctl.failed, ctl.q.tobytes())
-    running = ctl.running
-    tau0 = ctl.tau + (ctl._seg_t0 - ctl.t_ref) if running else ctl.tau
-    return (
-        ctl._seg_t0,
-        id(leg),
-        running,
-        tau0,
-        len(ctl.task_log),
-        ctl.failed,
-        ctl.sync_error.tobytes(),
-    )

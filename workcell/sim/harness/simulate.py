@@ -59,6 +59,7 @@ from workcell.sim.harness.faults import (
 )
 from workcell.sim.harness.monitor import LiveMonitor, SafetyMonitor
 from workcell.sim.harness.options import CONTROL_TIME, COORDINATION_POLICIES, SimOptions
+from workcell.sim.protocol.records import MotionLog, TaskRecord
 
 __all__ = ["CONTROL_TIME", "SimOptions", "SimResult", "check_control_bound", "simulate"]
 
@@ -139,6 +140,9 @@ class SimResult:
     metrics : Metrics
     monitor : LiveMonitor or None
         The live safety monitor of the run (its counters), None when off.
+    arm_logs : tuple of MotionLog
+        Each arm's published motion and task records
+        (:class:`~workcell.sim.protocol.records.MotionLog`), in arm order.
     """
 
     problem: Problem
@@ -151,13 +155,13 @@ class SimResult:
     monitor: LiveMonitor | None = None
     _tasks: tuple[dict[str, Any], ...] = ()
     _reservations: tuple[dict[str, Any], ...] = ()
-    _arms: tuple[ArmController, ...] = ()
+    arm_logs: tuple[MotionLog, ...] = ()
 
     def joints(self, times: Sequence[float] | FloatArray) -> dict[str, FloatArray]:
         """Each arm's actual joints at ``times`` (seconds) as run: arm name ->
         (N, dof) float (for rendering the cell at chosen instants)."""
         t = np.asarray(times, dtype=float).reshape(-1)
-        return {c.name: SafetyMonitor.joints(c, t) for c in self._arms}
+        return {c.name: SafetyMonitor.joints(c, t) for c in self.arm_logs}
 
     def tasks_frame(self) -> Any:
         """One row per task: task, arm, mode, planned_start, planned_end,
@@ -426,7 +430,7 @@ def simulate(
                 )
     live: LiveMonitor | None = None
     if monitor is True or monitor == "live":
-        live = LiveMonitor(cc, kernel, arms, trace, monitor_period)
+        live = LiveMonitor(cc, kernel, [c.log for c in arms], trace, monitor_period)
         live.start()
     coord.start()
     horizon = (
@@ -438,7 +442,7 @@ def simulate(
     kernel.run(until=None if False else horizon)
     if kernel.peek() < math.inf and kernel.peek() <= horizon:  # pragma: no cover
         raise InternalError("simulate: events left after the run")
-    t_end = max((max((r[1] for r in c.motion), default=0.0) for c in arms), default=0.0)
+    t_end = max((c.log.end_time() for c in arms), default=0.0)
     for c in arms:
         c.finish()
     result = _result(
@@ -512,10 +516,10 @@ def _result(
 ) -> SimResult:
     p = cc.problem
     T = p.n_tasks
-    logs: dict[int, tuple[int, list[Any]]] = {}
+    logs: dict[int, tuple[int, TaskRecord]] = {}
     for c in arms:
-        for t, log in c.task_log.items():
-            if coord.status[t] == "done" and math.isfinite(log[1]):
+        for t, log in c.log.tasks.items():
+            if coord.status[t] == "done" and log.finished:
                 logs[t] = (c.index, log)
     trace.sort()
     tasks: list[dict[str, Any]] = []
@@ -531,9 +535,9 @@ def _result(
             a, log = logs[t]
             row.update(
                 arm=p.arm_names[a],
-                mode=int(log[3]),
-                start=float(log[0]),
-                end=float(log[1]),
+                mode=int(log.mode),
+                start=float(log.start),
+                end=float(log.end),
                 status="done",
                 cause="",
                 cause_kind="",
@@ -555,14 +559,14 @@ def _result(
     # executed schedule
     executed: Schedule | None = None
     if len(logs) == T:
-        modes = np.array([int(logs[t][1][3]) for t in range(T)], dtype=np.int64)
-        starts = np.array([float(logs[t][1][0]) for t in range(T)])
-        ends = np.array([float(logs[t][1][1]) for t in range(T)])
+        modes = np.array([int(logs[t][1].mode) for t in range(T)], dtype=np.int64)
+        starts = np.array([float(logs[t][1].start) for t in range(T)])
+        ends = np.array([float(logs[t][1].end) for t in range(T)])
         waits = []
         blocking = np.zeros(T)
         for t in range(T):
             w = np.zeros(len(p.shapes[int(modes[t])].borders))
-            for j, x in logs[t][1][2]:
+            for j, x in logs[t][1].waits:
                 w[j] += x
             waits.append(w)
             blocking[t] = max(0.0, ends[t] - starts[t] - p.shapes[int(modes[t])].length(w))
@@ -588,7 +592,7 @@ def _result(
                         "end": e.time,
                     }
                 )
-    done_ends = [float(logs[t][1][1]) for t in logs]
+    done_ends = [float(logs[t][1].end) for t in logs]
     executed_mk = max(done_ends) if done_ends else math.nan
     # busy: time on a leg (travelling, working, or stopped on the way),
     # counted within [0, executed makespan] only, so a share in [0, 1]
@@ -596,7 +600,9 @@ def _result(
     busy = {n: 0.0 for n in p.arm_names}
     for c in arms:
         busy[c.name] = sum(
-            max(0.0, min(r[1], span) - max(r[0], 0.0)) for r in c.motion if r[2] is not None
+            max(0.0, min(r.end, span) - max(r.start, 0.0))
+            for r in c.log.records
+            if r.leg is not None
         )
     metrics = Metrics(
         planned_makespan=float(schedule.makespan),
@@ -620,7 +626,7 @@ def _result(
         events=kernel.events_run,
     )
     if monitor:
-        SafetyMonitor(cc, monitor_period).check(arms, max(t_end, 0.0), trace)
+        SafetyMonitor(cc, monitor_period).check([c.log for c in arms], max(t_end, 0.0), trace)
     metrics.wall_seconds = time.perf_counter() - wall0
     return SimResult(
         p,
@@ -633,7 +639,7 @@ def _result(
         live,
         tuple(tasks),
         tuple(res),
-        tuple(arms),
+        tuple(c.log for c in arms),
     )
 
 
