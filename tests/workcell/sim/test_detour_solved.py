@@ -64,7 +64,7 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         found.append((args, kwargs, res))
         return res
 
-    mp.setattr("workcell.sim.coordination.centralized.plan_detour", spy)
+    mp.setattr("workcell.sim.coordination.geometric.plan_detour", spy)
     try:
         result = simulate(cc, plan, seed=0)  # the live safety monitor is on
     finally:

@@ -21,7 +21,7 @@ from scheduler import Schedule, solve
 from workcell import SimOptions, compile_cell, load_example, simulate
 from workcell.geometry import CollisionWorld
 from workcell.sim import EmergencyStop
-from workcell.sim.harness.monitor import SafetyMonitor, SafetyViolation, _segment_dist2
+from workcell.sim.harness.monitor import SafetyMonitor, SafetyViolation, segment_dist2
 
 PERIOD = 0.02
 
@@ -169,7 +169,7 @@ def test_idle_stretches_cost_no_samples(supersigma: Any) -> None:
 @njit(cache=False)
 def _many(p0: Any, p1: Any, q0: Any, q1: Any, out: Any) -> None:
     for i in range(p0.shape[0]):
-        out[i] = _segment_dist2(p0[i], p1[i], q0[i], q1[i])
+        out[i] = segment_dist2(p0[i], p1[i], q0[i], q1[i])
 
 
 def test_the_capsule_pre_test_never_overestimates_a_distance() -> None:

@@ -6,6 +6,12 @@ from __future__ import annotations
 import pytest
 
 from multiarm.errors import UsageError
+from workcell.sim.comms.devices import (
+    DetectorController,
+    ForceController,
+    GripperController,
+    MotorController,
+)
 from workcell.sim.comms.microbus import BYTE_TIME, COMMAND_TIME, MOVE
 from workcell.sim.control.supersigma import (
     ABORT_FORCE,
@@ -15,11 +21,7 @@ from workcell.sim.control.supersigma import (
     FREE,
     PAPER_TABLE,
     Command,
-    DetectorController,
-    ForceController,
-    GripperController,
     Microbus,
-    MotorController,
     bus_load_table,
     status_lines_needed,
     steps_args,

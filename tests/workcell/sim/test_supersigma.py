@@ -5,6 +5,11 @@ from __future__ import annotations
 import pytest
 
 from multiarm.errors import UsageError, ValidationError
+from workcell.sim.comms.devices import (
+    ForceController,
+    GripperController,
+    MotorController,
+)
 from workcell.sim.comms.microbus import ACTUATE, COMMAND_TIME, MOVE
 from workcell.sim.control.supersigma import (
     ABORT_FORCE,
@@ -14,10 +19,7 @@ from workcell.sim.control.supersigma import (
     FREE,
     Command,
     Controller,
-    ForceController,
-    GripperController,
     Microbus,
-    MotorController,
     Piece,
     StepProfile,
     bus_load_table,

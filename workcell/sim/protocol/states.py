@@ -124,6 +124,7 @@ TASK_MACHINE = Machine(
         ("dispatched", "running", "the arm left the task's start station"),
         ("dispatched", "pending", "withdrawn: late part, re-solve, or its arm failed"),
         ("dispatched", "failed", "a part never comes or a predecessor failed"),
+        ("pending", "running", "its arm started it before the withdrawal reached it"),
         ("running", "done", "trajectory end reported"),
         ("running", "failed", "its insertion failed"),
         ("running", "pending", "interrupted by its arm's failure"),

@@ -13,6 +13,12 @@ Examples
 (16, 16)
 """
 
+from workcell.sim.comms.devices import (
+    DetectorController,
+    ForceController,
+    GripperController,
+    MotorController,
+)
 from workcell.sim.comms.microbus import (
     ABORT_FORCE,
     ABORT_RAIL,
@@ -20,11 +26,7 @@ from workcell.sim.comms.microbus import (
     FREE,
     Command,
     Controller,
-    DetectorController,
-    ForceController,
-    GripperController,
     Microbus,
-    MotorController,
     StepProfile,
     move_time,
     status_lines_needed,

@@ -33,7 +33,8 @@ the box goes on (the program can look at :attr:`CCU.aborts`).
 Examples
 --------
 >>> from workcell.sim.events.loop import EventLoop
->>> from workcell.sim.comms.microbus import Microbus, MotorController
+>>> from workcell.sim.comms.devices import MotorController
+>>> from workcell.sim.comms.microbus import Microbus
 >>> k = EventLoop()
 >>> bus = Microbus(k)
 >>> _ = bus.add(MotorController(1, "x"))

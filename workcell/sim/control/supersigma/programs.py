@@ -48,12 +48,14 @@ import numpy as np
 
 from multiarm.errors import ValidationError
 from multiarm.types import Seed, as_rng
-from workcell.sim.comms.microbus import (
+from workcell.sim.comms.devices import (
     DetectorController,
     ForceController,
     GripperController,
-    Microbus,
     MotorController,
+)
+from workcell.sim.comms.microbus import (
+    Microbus,
     StepProfile,
 )
 from workcell.sim.control.supersigma.ccu import CCU, Box, RunReport
