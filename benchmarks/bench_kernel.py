@@ -75,7 +75,7 @@ def measure(seed: int, size: list[int] | tuple[int, ...], seconds: float) -> dic
 def table(m: Any) -> str:
     """The Markdown table of the measured rows."""
     lines = [
-        "# EventLoop: numba vs plain Python",
+        "# Kernel: numba vs plain Python",
         "",
         f"Full decodes (earliest-finish mode choice, waits) per second, "
         f"{', '.join(f'{s:g}' for s in sorted(set(m['seconds'])))} s each, same code, two "

@@ -136,7 +136,7 @@ def table(m: Any) -> str:
         )
     lines += [
         "",
-        f"EventLoop compile or load before timing: {float(m['kernel_load_s'].sum()):.1f} s.",
+        f"Kernel compile or load before timing: {float(m['kernel_load_s'].sum()):.1f} s.",
     ]
     return "\n".join(lines) + "\n"
 
