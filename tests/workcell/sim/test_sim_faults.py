@@ -163,6 +163,33 @@ def test_a_re_solve_never_drops_a_task_a_working_arm_can_do(cell: Any, plan: Any
     assert all("every" in c and "failed" in c for c in causes), causes
 
 
+def test_tasks_frame_takes_each_row_from_one_plan(cell: Any, plan: Any) -> None:
+    """After re-solves, every row's planned times and arm come from the plan
+    named in its ``plan`` column (no sentinel time: dropped tasks keep the
+    times of the last plan that planned them to run); a task interrupted by
+    its arm's failure keeps its start."""
+    p = cell.problem
+    at = 0.2 * plan.makespan
+    r = simulate(cell, plan, faults=[ArmFailure("left", at)], options=SimOptions(monitor=False))
+    tf = r.tasks_frame()
+    assert r.metrics.resolves == 1 and set(tf["plan"]) <= {0, 1} and (tf["plan"] == 1).any()
+    last = r.plan.schedule
+    for row in tf[tf["plan"] == 1].itertuples():
+        t = p.task_names.index(row.task)
+        assert (row.planned_start, row.planned_end) == (float(last.start[t]), float(last.end[t]))
+        if row.status == "failed":
+            assert row.arm == p.arm_names[int(last.arms(p)[t])]
+    for row in tf[tf["plan"] == 0].itertuples():
+        t = p.task_names.index(row.task)
+        assert (row.planned_start, row.planned_end) == (float(plan.start[t]), float(plan.end[t]))
+    assert (tf["planned_end"] < 10 * plan.makespan).all()
+    interrupted = [e.task for e in r.trace if e.kind == "task_failed" and "interrupted" in e.detail]
+    failed = tf.set_index("task")
+    for task in interrupted:
+        if failed.loc[task, "status"] == "failed":
+            assert failed.loc[task, "start"] <= at
+
+
 def test_crash_is_a_reflex_stop_told_afterwards(cell: Any, plan: Any) -> None:
     r = simulate(cell, plan, faults=[Crash("left", 3.0, 2.0)])
     msgs = [(e.time, e.message) for e in r.trace if e.kind == "message" and e.arm == "left"]

@@ -459,8 +459,10 @@ def test_result_tables_and_files(supersigma: Any, plans: Any, tmp_path: Path) ->
         "status",
         "cause",
         "cause_kind",
+        "plan",
     ]
     assert (tf["status"] == "done").all() and (tf["cause_kind"] == "").all()
+    assert (tf["plan"] == 0).all()  # no re-solve: every row from the schedule given
     rf = r.reservations_frame()
     assert set(rf["kind"]) <= {"zone", "move", "tool"} and len(rf) > 0
     assert (rf["end"] >= rf["start"]).all()

@@ -146,6 +146,11 @@ class Coordinator:
         self.released: set[Piece] = set()
         self.held: dict[Piece, int] = {}
         self.orders: dict[tuple[str, int], list[Piece]] = {}
+        self.plans: list[Schedule] = [plan]
+        """Every plan followed, in order: the one given, then one per re-solve."""
+        self.plan_of: list[int] = [0] * T
+        """Per task, the plan (index in :attr:`plans`) its planned times and
+        arm come from: the last one that planned it to run."""
         self.dropped: frozenset[int] = frozenset()
         """Tasks the last re-solve dropped (:attr:`scheduler.Rescheduled.dropped`)."""
         self.never: set[int] = set()

@@ -53,6 +53,10 @@ class CoordinationPolicy(Protocol):
     plan: Schedule
     """The plan followed now (after any re-solve)."""
     dropped: frozenset[int]
+    plans: list[Schedule]
+    """Every plan followed: the one given, then one per re-solve."""
+    plan_of: list[int]
+    """Per task, the index in ``plans`` of the plan its planned times come from."""
     failed_arms: set[int]
     resolving: bool
     resolves: int

@@ -293,6 +293,10 @@ def resolve(self: Coordinator, reason: str) -> None:
             self.set_status(t, TaskState.PENDING)
     self.plan = new
     self.dropped = res.dropped
+    self.plans.append(new)
+    for t in range(p.n_tasks):
+        if t not in res.dropped:
+            self.plan_of[t] = len(self.plans) - 1
     self._build_orders()
     mk = res.makespan
     # the wall-clock latency goes to the metrics only: the trace is

@@ -73,9 +73,14 @@ class SimResult:
 
     def tasks_frame(self) -> Any:
         """One row per task: task, arm, mode, planned_start, planned_end,
-        start, end, status ("done" | "failed"), cause (text) and cause_kind
+        start, end, status ("done" | "failed"), cause (text), cause_kind
         (its category, one of :data:`~workcell.sim.coordination.centralized.CAUSE_KINDS`;
-        "" for a task done)."""
+        "" for a task done) and plan: the plan its planned times come from
+        (0: the schedule given, ``k``: the plan of the ``k``-th re-solve; the
+        last one that planned the task to run). A failed task that had
+        started (interrupted by its arm's failure, or an insertion that
+        failed) keeps its start; start and end are NaN for a task that never
+        started."""
         import pandas as pd
 
         cols = [
@@ -89,6 +94,7 @@ class SimResult:
             "status",
             "cause",
             "cause_kind",
+            "plan",
         ]
         return pd.DataFrame(self._tasks, columns=cols)
 
@@ -138,19 +144,22 @@ def build_result(
     p = cc.problem
     T = p.n_tasks
     logs: dict[int, tuple[int, TaskRecord]] = {}
+    started: dict[int, tuple[int, TaskRecord]] = {}
     for c in arms:
         for t, log in c.log.tasks.items():
             if coord.status[t] == "done" and log.finished:
                 logs[t] = (c.index, log)
+            elif t not in started or log.start > started[t][1].start:
+                started[t] = (c.index, log)
     trace.sort()
     tasks: list[dict[str, Any]] = []
-    plan = coord.plan
     for t in range(T):
-        m_plan = int(schedule.mode[t])
+        k = coord.plan_of[t]
+        planned = coord.plans[k]
         row: dict[str, Any] = {
             "task": p.task_names[t],
-            "planned_start": float(schedule.start[t]),
-            "planned_end": float(schedule.end[t]),
+            "planned_start": float(planned.start[t]),
+            "planned_end": float(planned.end[t]),
         }
         if t in logs:
             a, log = logs[t]
@@ -164,9 +173,13 @@ def build_result(
                 cause_kind="",
             )
         else:
-            m = int(plan.mode[t])
+            m = int(planned.mode[t])
             a = int(p.mode_arm[m])
-            row.update(arm=p.arm_names[a], mode=m, start=math.nan, end=math.nan, status="failed")
+            # a task interrupted (or that ran and failed) keeps its start
+            begun = started.get(t)
+            start = float(begun[1].start) if begun is not None else math.nan
+            end = float(begun[1].end) if begun is not None and begun[1].finished else math.nan
+            row.update(arm=p.arm_names[a], mode=m, start=start, end=end, status="failed")
             row["cause_kind"], row["cause"] = _cause(coord, t, strict)
             trace.add(
                 kernel.now,
@@ -175,7 +188,7 @@ def build_result(
                 task=p.task_names[t],
                 detail=row["cause"],
             )
-        del m_plan
+        row["plan"] = k
         tasks.append(row)
     # executed schedule
     executed: Schedule | None = None
@@ -252,7 +265,7 @@ def build_result(
     return SimResult(
         p,
         schedule,
-        Plan(p, plan),
+        Plan(p, coord.plan),
         executed,
         seed,
         trace,
