@@ -27,7 +27,7 @@ multiarm.errors.InternalError: task: illegal transition done -> pending
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from multiarm.errors import InternalError
 
@@ -93,10 +93,16 @@ class Machine:
     states: tuple[str, ...]
     initial: str
     transitions: tuple[tuple[str, str, str], ...]
+    legal: frozenset[tuple[str, str]] = field(init=False, repr=False, compare=False)
+    """The ``(from, to)`` pairs of the table, and every state staying put."""
+
+    def __post_init__(self) -> None:
+        pairs = {(a, b) for a, b, _ in self.transitions} | {(s, s) for s in self.states}
+        object.__setattr__(self, "legal", frozenset(pairs))
 
     def allowed(self, old: str, new: str) -> bool:
         """Whether ``old -> new`` is in the table (staying put always is)."""
-        return old == new or any(a == old and b == new for a, b, _ in self.transitions)
+        return (old, new) in self.legal
 
     def check(self, old: str, new: str) -> None:
         """Raise :class:`InternalError` unless ``old -> new`` is legal.
@@ -106,7 +112,7 @@ class Machine:
         InternalError
             Naming the machine and the transition.
         """
-        if not self.allowed(old, new):
+        if (old, new) not in self.legal:
             raise InternalError(f"{self.name}: illegal transition {old} -> {new}")
 
     def table(self) -> str:
