@@ -8,7 +8,7 @@ Functions here are methods of :class:`~workcell.sim.control.controller.ArmContro
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -16,13 +16,14 @@ from multiarm.types import FloatArray
 from workcell.arms import JointTrajectory
 from workcell.sim.protocol.messages import Leg, Station
 
-if TYPE_CHECKING:
-    from workcell.sim.control.controller import ArmController
+_Self = Any
+"""The :class:`~workcell.sim.control.controller.ArmController` these functions are methods of (bound in its
+class body; typed loosely here: workcell.sim.control.controller imports this module, never the reverse)."""
 
 __all__: list[str] = []
 
 
-def back_off(self: ArmController, until: tuple[int, Any, int]) -> bool:
+def back_off(self: _Self, until: tuple[int, Any, int]) -> bool:
     """Retreat to the home joints out of a mover's way (S2.6 geometric
     deadlock) and come back once the mover has passed (``until``:
     its index, leg and station). Returns whether the retreat started."""
@@ -58,7 +59,7 @@ def back_off(self: ArmController, until: tuple[int, Any, int]) -> bool:
     return True
 
 
-def take_detour(self: ArmController, traj: JointTrajectory, task: int) -> None:
+def take_detour(self: _Self, traj: JointTrajectory, task: int) -> None:
     """Go to the next station along ``traj`` instead (S2.12 alternative
     trajectory), then on with the task from there."""
     leg = self.leg
@@ -73,7 +74,7 @@ def take_detour(self: ArmController, traj: JointTrajectory, task: int) -> None:
     self._run()
 
 
-def come_back(self: ArmController) -> None:
+def come_back(self: _Self) -> None:
     """Return from a back-off to where the arm stopped."""
     if self.away is None or self.leg is not None:
         return
@@ -88,7 +89,7 @@ def come_back(self: ArmController) -> None:
     self._run()
 
 
-def predict(self: ArmController, times: FloatArray) -> FloatArray:
+def predict(self: _Self, times: FloatArray) -> FloatArray:
     """(N, dof) commanded joints at future ``times`` if the arm keeps going
     to its next station and stops there (standing arms stand)."""
     leg = self.leg
@@ -100,23 +101,24 @@ def predict(self: ArmController, times: FloatArray) -> FloatArray:
         return np.repeat(leg.trajectory.sample(np.array([tau_now])), len(times), axis=0)
     stop = leg.stations[self.k].tau
     taus = np.minimum(stop, tau_now + (times - now))
-    return leg.trajectory.sample(taus)
+    out: FloatArray = leg.trajectory.sample(taus)
+    return out
 
 
-def next_stop_time(self: ArmController) -> float:
+def next_stop_time(self: _Self) -> float:
     """When the arm reaches its next station if it moves now (seconds)."""
     leg = self.leg
     if leg is None:
-        return self.kernel.now
-    return self.kernel.now + max(0.0, leg.stations[self.k].tau - self.current_tau())
+        return float(self.kernel.now)
+    return float(self.kernel.now + max(0.0, leg.stations[self.k].tau - self.current_tau()))
 
 
-def held_by_geometry(self: ArmController) -> bool:
+def held_by_geometry(self: _Self) -> bool:
     """Held at its place by the coordinator's geometric check (S2.12 *stop*)."""
     return "geometry" in self.stops
 
 
-def release_geometry_hold(self: ArmController) -> None:
+def release_geometry_hold(self: _Self) -> None:
     """End the geometric hold: the arm sets off again unless it stands at
     a station (it passes when its conditions hold) or another stop holds it."""
     self.stops.discard("geometry")
@@ -124,7 +126,7 @@ def release_geometry_hold(self: ArmController) -> None:
         self._run()
 
 
-def stuck(self: ArmController) -> bool:
+def stuck(self: _Self) -> bool:
     """Standing and waiting on something other than the clock."""
     if self.running or self.failed or self.leg is None:
         return False

@@ -8,15 +8,16 @@ Functions here are methods of :class:`~workcell.sim.control.controller.ArmContro
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:
-    from workcell.sim.control.controller import ArmController
+_Self = Any
+"""The :class:`~workcell.sim.control.controller.ArmController` these functions are methods of (bound in its
+class body; typed loosely here: workcell.sim.control.controller imports this module, never the reverse)."""
 
 __all__: list[str] = []
 
 
-def receive(self: ArmController, kind: str, payload: Any) -> None:
+def receive(self: _Self, kind: str, payload: Any) -> None:
     """A frame from the coordinator (already delivered by the medium)."""
     if self.failed:
         return
@@ -62,7 +63,7 @@ def receive(self: ArmController, kind: str, payload: Any) -> None:
         pass
 
 
-def _stop_by_id(self: ArmController, stop: str) -> None:
+def _stop_by_id(self: _Self, stop: str) -> None:
     """A coordinator's stop (``"alarm#<id>"``, ``"activation#<id>"``): in
     force until the release with the same id (a release that overtook
     its stop on the medium cancels it in advance)."""
@@ -71,13 +72,13 @@ def _stop_by_id(self: ArmController, stop: str) -> None:
     self._pause(stop)
 
 
-def _release_stop(self: ArmController, stop: str) -> None:
+def _release_stop(self: _Self, stop: str) -> None:
     """The release of the coordinator's stop ``stop`` (matched by id)."""
     self.released_stops.add(stop)
     self._unpause(stop)
 
 
-def _withdraw(self: ArmController, t: int) -> None:
+def _withdraw(self: _Self, t: int) -> None:
     """Drop the not yet started task ``t`` (the plan changed)."""
     if t in self.log.tasks:
         return
@@ -99,7 +100,7 @@ def _withdraw(self: ArmController, t: int) -> None:
         self.send(self.station, 0, "trajectory_end", ("withdrawn", t))
 
 
-def internal(self: ArmController, message: str, task: int = -1, detail: str = "") -> None:
+def internal(self: _Self, message: str, task: int = -1, detail: str = "") -> None:
     """Record an S2.3 message between the two processors."""
     self.trace.add(
         self.kernel.now,
@@ -113,14 +114,14 @@ def internal(self: ArmController, message: str, task: int = -1, detail: str = ""
     )
 
 
-def _report_stop(self: ArmController) -> None:
+def _report_stop(self: _Self) -> None:
     """Tell the coordinator where it stopped when inside a shared zone (S2.7)."""
     held = sorted(p for p in self.granted if p[0] == "move")
     for p in held:
         self.send(self.station, 0, "position", (p, self.flange()))
 
 
-def flange(self: ArmController) -> tuple[float, float, float]:
+def flange(self: _Self) -> tuple[float, float, float]:
     """Flange position now (metres)."""
     q = self.position()
     x = self.arm.fk(q[None])[0][:3, 3]

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -43,8 +43,20 @@ from multiarm.errors import ValidationError
 from workcell.arms.profiles import Drive, ServoDrive, StepperDrive
 from workcell.sim.events.loop import EventLoop, Handle
 
-if TYPE_CHECKING:
-    from workcell.sim.control.controller import ArmController
+_Self = Any
+"""The :class:`~workcell.sim.control.controller.ArmController` whose method
+:func:`pipeline_step` is (bound in its class body; typed loosely here: the
+controller imports this module, never the reverse)."""
+
+
+class Stepped(Protocol):
+    """What the tick loop drives: an arm that may be moving and steps its pipeline."""
+
+    running: bool
+
+    def pipeline_step(self) -> None:
+        """One sampling period of the pipeline."""
+
 
 __all__ = ["INTERNAL_MESSAGES", "Ticker", "pipeline_offset", "pipeline_step", "stop_time"]
 
@@ -117,7 +129,7 @@ class Ticker:
     def __init__(self, kernel: EventLoop, period: float) -> None:
         self.kernel = kernel
         self.period = float(period)
-        self.arms: list[ArmController] = []
+        self.arms: list[Stepped] = []
         self.ticks = 0
         self._handle: Handle | None = None
 
@@ -142,7 +154,7 @@ class Ticker:
             )
 
 
-def pipeline_step(self: ArmController) -> None:
+def pipeline_step(self: _Self) -> None:
     """One sampling period (S2.3): compute point i, check point i - 1,
     execute point i - offset (the ring buffer holds offset + 2 points)."""
     leg = self.leg

@@ -23,7 +23,7 @@ offsets, so the zone windows of the compiled mode stay valid.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
@@ -31,8 +31,9 @@ from workcell.arms.profiles import StepperDrive
 from workcell.sim.control.force import CRASH_AXIS, CRASH_FORCE, InsertSearch
 from workcell.sim.protocol.messages import Leg, Mark
 
-if TYPE_CHECKING:
-    from workcell.sim.control.controller import ArmController
+_Self = Any
+"""The :class:`~workcell.sim.control.controller.ArmController` these functions are methods of (bound in its
+class body; typed loosely here: workcell.sim.control.controller imports this module, never the reverse)."""
 
 __all__ = ["marks"]
 
@@ -59,14 +60,14 @@ def marks(searches: Sequence[InsertSearch]) -> list[Mark]:
     return out
 
 
-def crash(self: ArmController, recovery: float, force: float = CRASH_FORCE) -> bool:
+def crash(self: _Self, recovery: float, force: float = CRASH_FORCE) -> bool:
     """A crash of ``force`` newtons (S1.7); see :meth:`sense_crash`.
 
     Returns whether the arm stopped (reflex arc, S1.2)."""
-    return self.sense_crash(force, recovery) == "stop"
+    return bool(self.sense_crash(force, recovery) == "stop")
 
 
-def sense_crash(self: ArmController, force: float, recovery: float) -> str:
+def sense_crash(self: _Self, force: float, recovery: float) -> str:
     """A crash pushing ``force`` newtons on the wrist's z axis now.
 
     While the arm moves (free motion, low thresholds) or pushes (an
@@ -98,19 +99,19 @@ def sense_crash(self: ArmController, force: float, recovery: float) -> str:
     return "stop"
 
 
-def _resume(self: ArmController, reason: str) -> None:
+def _resume(self: _Self, reason: str) -> None:
     """End an unplanned stop, also when standing at a station."""
     self._unpause(reason)
 
 
-def read_force(self: ArmController, axis: int) -> float:
+def read_force(self: _Self, axis: int) -> float:
     """The S1.7 command "tell me the force on axis k" (newtons, the last
     sample of the wrist sensor; 0 in free motion: inertial forces are
     not modelled)."""
-    return self.sensor.read(axis)
+    return float(self.sensor.read(axis))
 
 
-def set_thresholds(self: ArmController, values: float | Sequence[float], why: str = "") -> None:
+def set_thresholds(self: _Self, values: float | Sequence[float], why: str = "") -> None:
     """The S1.7 command "set the thresholds" (newtons: one value for the
     three components, or three), recorded as a ``"force"`` trace event."""
     self.sensor.set_thresholds(values)
@@ -126,13 +127,13 @@ def set_thresholds(self: ArmController, values: float | Sequence[float], why: st
     )
 
 
-def _force_event(self: ArmController, leg: Leg, detail: str) -> None:
+def _force_event(self: _Self, leg: Leg, detail: str) -> None:
     self.trace.add(
         self.kernel.now, "force", arm=self.name, task=self._task_name(leg.task), detail=detail
     )
 
 
-def _search_failure(self: ArmController, leg: Leg) -> str | None:
+def _search_failure(self: _Self, leg: Leg) -> str | None:
     """The cause when a search of the task leg never found its hole."""
     for s in leg.searches:
         if not s.found:
@@ -140,7 +141,7 @@ def _search_failure(self: ArmController, leg: Leg) -> str | None:
     return None
 
 
-def _plan_mark(self: ArmController) -> None:
+def _plan_mark(self: _Self) -> None:
     """Schedule the leg's next force-search mark if it comes before the
     next station."""
     if self._mark_h is not None:
@@ -158,7 +159,7 @@ def _plan_mark(self: ArmController) -> None:
     )
 
 
-def _mark(self: ArmController) -> None:
+def _mark(self: _Self) -> None:
     self._mark_h = None
     if self.leg is None or self.failed:
         return
@@ -167,7 +168,7 @@ def _mark(self: ArmController) -> None:
         self._plan_mark()
 
 
-def _fire_marks(self: ArmController, tau: float) -> None:
+def _fire_marks(self: _Self, tau: float) -> None:
     """Do every mark of the leg due at offset ``tau``."""
     leg = self.leg
     assert leg is not None and leg.marks is not None
@@ -192,7 +193,7 @@ def _fire_marks(self: ArmController, tau: float) -> None:
                 return
 
 
-def _try_done(self: ArmController, leg: Leg, s: InsertSearch, k: int) -> None:
+def _try_done(self: _Self, leg: Leg, s: InsertSearch, k: int) -> None:
     """Try ``k`` of search ``s`` ends: read the force on z (S1.7)."""
     fs = s.search
     off = fs.offsets()[k - 1]
@@ -214,7 +215,7 @@ def _try_done(self: ArmController, leg: Leg, s: InsertSearch, k: int) -> None:
         self.set_thresholds(self.sensor.free, f"search of step {s.step} over: free motion")
 
 
-def _extra_try(self: ArmController) -> None:
+def _extra_try(self: _Self) -> None:
     """A try made while the trajectory clock stands (more tries than planned)."""
     self._extra_h = None
     st = self._extra
@@ -232,7 +233,7 @@ def _extra_try(self: ArmController) -> None:
     self._resume("search")
 
 
-def _skip_to(self: ArmController, tau: float) -> None:
+def _skip_to(self: _Self, tau: float) -> None:
     """The hole was found before the planned tries were over: the rest of
     the search dwell is skipped (the arm stands meanwhile); it sets off
     towards its next station now, checked like any departure."""
@@ -246,7 +247,7 @@ def _skip_to(self: ArmController, tau: float) -> None:
     self._run()
 
 
-def fail(self: ArmController) -> None:
+def fail(self: _Self) -> None:
     """The arm fails for good: it stops, and is taken to its home joints
     outside every zone (not modelled: the retraction itself)."""
     if self.failed:
@@ -266,7 +267,7 @@ def fail(self: ArmController) -> None:
     self._seg_t0 = self.kernel.now
 
 
-def lose_sync(self: ArmController, axis: int, steps: int) -> float:
+def lose_sync(self: _Self, axis: int, steps: int) -> float:
     """Stepper ``axis`` loses ``steps`` steps: the actual position drifts
     from the tracked one (S1.6). Returns the error in metres."""
     d = self.arm.drives[axis]
@@ -277,7 +278,7 @@ def lose_sync(self: ArmController, axis: int, steps: int) -> float:
     return err
 
 
-def homing_time(self: ArmController) -> float:
+def homing_time(self: _Self) -> float:
     """Seconds to home every stepper axis that lost steps (S1.6)."""
     q = self.position()
     out = 0.0

@@ -7,20 +7,21 @@ Functions here are methods of :class:`~workcell.sim.coordination.centralized.Coo
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from workcell.geometry import ObstacleSet, plan_detour
 from workcell.sim.protocol.ports import ArmPort
 
-if TYPE_CHECKING:
-    from workcell.sim.coordination.centralized import Coordinator
+_Self = Any
+"""The :class:`~workcell.sim.coordination.centralized.Coordinator` these functions are methods of (bound in its
+class body; typed loosely here: workcell.sim.coordination.centralized imports this module, never the reverse)."""
 
 __all__: list[str] = []
 
 
-def check_departure(self: Coordinator, ctl: ArmPort) -> bool:
+def check_departure(self: _Self, ctl: ArmPort) -> bool:
     assert self.guard is not None
     blockers = self.guard.blockers(ctl, self.arms)
     a = ctl.index
@@ -45,7 +46,7 @@ def check_departure(self: Coordinator, ctl: ArmPort) -> bool:
     return False
 
 
-def try_detour(self: Coordinator, ctl: ArmPort) -> bool:
+def try_detour(self: _Self, ctl: ArmPort) -> bool:
     """S2.12 "continue with alternative trajectory": an OMPL path to the
     next station around the arms standing in the way (tried once per
     station; work-limited, so the same seed plans the same path)."""
@@ -102,12 +103,12 @@ def try_detour(self: Coordinator, ctl: ArmPort) -> bool:
     return True
 
 
-def check_way(self: Coordinator, ctl: ArmPort) -> bool:
+def check_way(self: _Self, ctl: ArmPort) -> bool:
     assert self.guard is not None
     return not self.guard.blockers(ctl, self.arms)
 
 
-def arm_moved(self: Coordinator) -> None:
+def arm_moved(self: _Self) -> None:
     """Look at the geometric stops again (after something moved or stopped).
 
     Progress is guaranteed: at most ``recheck_limit`` passes run at one
@@ -130,7 +131,7 @@ def arm_moved(self: Coordinator) -> None:
     self._recheck_h = self.kernel.schedule(delay, self._recheck, priority=1)
 
 
-def _recheck(self: Coordinator) -> None:
+def _recheck(self: _Self) -> None:
     self._recheck_h = None
     for ctl in self.arms:
         if ctl.failed:
@@ -174,7 +175,7 @@ def _recheck(self: Coordinator) -> None:
                     self._promote(ctl.index, blockers)
 
 
-def _promote(self: Coordinator, a: int, blockers: list[int]) -> None:
+def _promote(self: _Self, a: int, blockers: list[int]) -> None:
     """Last resort of a geometric deadlock: an arm standing in ``a``'s way
     waits for a resource the plan gives ``a`` first, and cannot back off;
     let it go first (``a`` has not taken that resource yet)."""

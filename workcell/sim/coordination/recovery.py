@@ -10,20 +10,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import Any
 
 from scheduler.reschedule import FrozenTask, reschedule
 from workcell.sim.comms.medium import BROADCAST
 from workcell.sim.protocol.messages import Piece
 from workcell.sim.protocol.states import TaskState
 
-if TYPE_CHECKING:
-    from workcell.sim.coordination.centralized import Coordinator
+_Self = Any
+"""The :class:`~workcell.sim.coordination.centralized.Coordinator` these functions are methods of (bound in its
+class body; typed loosely here: workcell.sim.coordination.centralized imports this module, never the reverse)."""
 
 __all__: list[str] = []
 
 
-def emergency_stop(self: Coordinator, duration: float) -> None:
+def emergency_stop(self: _Self, duration: float) -> None:
     """Broadcast the alarm; clear it ``duration`` seconds later."""
     self.trace.add(self.kernel.now, "fault", detail=f"emergency stop for {duration:g} s")
     stop = next(self._stop_ids)
@@ -32,7 +33,7 @@ def emergency_stop(self: Coordinator, duration: float) -> None:
     self.kernel.schedule(duration, self._clear_alarm, stop)
 
 
-def _clear_alarm(self: Coordinator, stop: int) -> None:
+def _clear_alarm(self: _Self, stop: int) -> None:
     """Release the emergency stop ``stop`` at every working arm (matched
     by id: an arm stays stopped while any alarm is in force)."""
     self.alarms.discard(stop)
@@ -42,7 +43,7 @@ def _clear_alarm(self: Coordinator, stop: int) -> None:
             self.net.send(0, a + 1, "wake_up", ("alarm_clear", stop))
 
 
-def arm_failed(self: Coordinator, a: int) -> None:
+def arm_failed(self: _Self, a: int) -> None:
     """Arm ``a`` failed: give back its resources, reassign its tasks."""
     p = self.p
     self.failed_arms.add(a)
@@ -100,7 +101,7 @@ def arm_failed(self: Coordinator, a: int) -> None:
     self._serve_all()
 
 
-def parts_late(self: Coordinator, notices: Sequence[tuple[list[int], float, str]]) -> None:
+def parts_late(self: _Self, notices: Sequence[tuple[list[int], float, str]]) -> None:
     """Parts found late at one instant: ``(tasks, arrival, part)`` each.
 
     Every gated task's release moves first, then each notice is handled
@@ -116,7 +117,7 @@ def parts_late(self: Coordinator, notices: Sequence[tuple[list[int], float, str]
         self.part_late(tasks, arrival, part)
 
 
-def part_late(self: Coordinator, tasks: list[int], arrival: float, part: str) -> None:
+def part_late(self: _Self, tasks: list[int], arrival: float, part: str) -> None:
     """Part ``part`` will come at ``arrival`` (inf: never) for ``tasks``.
 
     A gated task already dispatched with its start permitted has the
@@ -162,7 +163,7 @@ def part_late(self: Coordinator, tasks: list[int], arrival: float, part: str) ->
     self.resolve(f"part {part!r} late")
 
 
-def activate(self: Coordinator, zones: tuple[str, ...]) -> None:
+def activate(self: _Self, zones: tuple[str, ...]) -> None:
     """Change the active zones once every arm has stopped (S2.5)."""
     if self.activation is None:  # else: the pending change is replaced
         self.activation_id = next(self._stop_ids)
@@ -184,7 +185,7 @@ def activate(self: Coordinator, zones: tuple[str, ...]) -> None:
     self._try_activation()
 
 
-def _try_activation(self: Coordinator) -> None:
+def _try_activation(self: _Self) -> None:
     zones = self.activation
     if zones is None or len(self.activation_acks) < self.p.n_arms:
         return
@@ -210,11 +211,11 @@ def _try_activation(self: Coordinator) -> None:
         self._dispatch_next(a)
 
 
-def _withdraw(self: Coordinator, t: int) -> None:
+def _withdraw(self: _Self, t: int) -> None:
     """Take back the dispatched, not started task ``t``: its grants and
     requests are given back (the arm drops them too) and its arm told."""
     a = int(self.p.mode_arm[int(self.plan.mode[t])])
-    if self.zm_wait[a] is not None and self.zm_wait[a][2] == t:  # type: ignore[index]
+    if self.zm_wait[a] is not None and self.zm_wait[a][2] == t:
         if self.zone_checks and self.zm.waiting(a) is not None:
             self.zm.cancel(a)
         self.zm_wait[a] = None
@@ -229,7 +230,7 @@ def _withdraw(self: Coordinator, t: int) -> None:
     self.net.send(0, a + 1, "sleep", ("withdraw", -1, t, 0.0))
 
 
-def _withdraw_never(self: Coordinator) -> None:
+def _withdraw_never(self: _Self) -> None:
     """Take back the dispatched tasks that can no longer run under the
     kept plan (a predecessor on a failed arm): their arms would wait at
     their starts for good; freed, they go on with their other tasks."""
@@ -241,7 +242,7 @@ def _withdraw_never(self: Coordinator) -> None:
         self._dispatch_next(a)
 
 
-def resolve(self: Coordinator, reason: str) -> None:
+def resolve(self: _Self, reason: str) -> None:
     """Re-solve from the current state (module docstring)."""
     p = self.p
     now = self.kernel.now

@@ -8,20 +8,21 @@ Functions here are methods of :class:`~workcell.sim.coordination.centralized.Coo
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from multiarm.errors import InternalError, UsageError
 from workcell.sim.comms.medium import Frame
 from workcell.sim.protocol.messages import Piece
 from zones.manager import Deadlock, Wake
 
-if TYPE_CHECKING:
-    from workcell.sim.coordination.centralized import Coordinator
+_Self = Any
+"""The :class:`~workcell.sim.coordination.centralized.Coordinator` these functions are methods of (bound in its
+class body; typed loosely here: workcell.sim.coordination.centralized imports this module, never the reverse)."""
 
 __all__: list[str] = []
 
 
-def receive(self: Coordinator, frame: Frame) -> None:
+def receive(self: _Self, frame: Frame) -> None:
     """A frame for the coordinator."""
     payload: Any = frame.payload[0]  # type: ignore[index]
     a = frame.src - 1
@@ -56,19 +57,19 @@ def receive(self: Coordinator, frame: Frame) -> None:
         )
 
 
-def _zone_name(self: Coordinator, piece: Piece) -> str:
+def _zone_name(self: _Self, piece: Piece) -> str:
     if piece[0] == "tool":
-        return self.p.tool_names[piece[1]]
-    return self.p.zone_names[piece[1]]
+        return str(self.p.tool_names[piece[1]])
+    return str(self.p.zone_names[piece[1]])
 
 
-def _serve_all(self: Coordinator) -> None:
+def _serve_all(self: _Self) -> None:
     for b in range(self.p.n_arms):
         if self.pending[b] and self.zm_wait[b] is None:
             self._serve(b)
 
 
-def _serve(self: Coordinator, a: int) -> None:
+def _serve(self: _Self, a: int) -> None:
     arm_name = self.p.arm_names[a]
     while self.pending[a] and self.zm_wait[a] is None:
         piece = self.pending[a][0]
@@ -90,7 +91,7 @@ def _serve(self: Coordinator, a: int) -> None:
     del arm_name
 
 
-def _sleep(self: Coordinator, a: int, piece: Piece, name: str, task: str, why: str) -> None:
+def _sleep(self: _Self, a: int, piece: Piece, name: str, task: str, why: str) -> None:
     if piece in self.told_sleep:
         return
     self.told_sleep.add(piece)
@@ -100,7 +101,7 @@ def _sleep(self: Coordinator, a: int, piece: Piece, name: str, task: str, why: s
     self.net.send(0, a + 1, "sleep", piece)
 
 
-def _granted(self: Coordinator, a: int, piece: Piece) -> None:
+def _granted(self: _Self, a: int, piece: Piece) -> None:
     self.held[piece] = a
     name = self._zone_name(piece)
     task = self.p.task_names[piece[2]] if piece[2] >= 0 else ""
@@ -119,7 +120,7 @@ def _granted(self: Coordinator, a: int, piece: Piece) -> None:
         self.net.send(0, a + 1, "zone_grant", piece)
 
 
-def _zm_request(self: Coordinator, a: int, piece: Piece) -> tuple[bool, tuple[Any, ...]]:
+def _zm_request(self: _Self, a: int, piece: Piece) -> tuple[bool, tuple[Any, ...]]:
     if not self.zone_checks:
         return True, ()
     kind, idx = piece[0], piece[1]
@@ -139,7 +140,7 @@ def _zm_request(self: Coordinator, a: int, piece: Piece) -> tuple[bool, tuple[An
     return r.granted, r.events
 
 
-def _events(self: Coordinator, events: tuple[Any, ...]) -> None:
+def _events(self: _Self, events: tuple[Any, ...]) -> None:
     for ev in events:
         if isinstance(ev, Wake):
             b = int(ev.arm)  # type: ignore[call-overload]
@@ -156,7 +157,7 @@ def _events(self: Coordinator, events: tuple[Any, ...]) -> None:
             )
 
 
-def _release(self: Coordinator, a: int, piece: Piece) -> None:
+def _release(self: _Self, a: int, piece: Piece) -> None:
     self.released.add(piece)
     self.held.pop(piece, None)
     if not self.zone_checks:
@@ -179,7 +180,7 @@ def _release(self: Coordinator, a: int, piece: Piece) -> None:
         raise InternalError(f"zone protocol: {exc}") from None
 
 
-def _position(self: Coordinator, a: int, payload: Any) -> None:
+def _position(self: _Self, a: int, payload: Any) -> None:
     piece, xyz = payload
     if piece is None:
         self.activation_acks.add(a)

@@ -297,7 +297,7 @@ def simulate(
 
         net.receivers[a + 1] = rx
     if ticker is not None:
-        ticker.arms = arms
+        ticker.arms = list(arms)
     coord = make_policy(
         coordination,
         cc,
