@@ -56,7 +56,7 @@ def _monitor(cc: Any, plan: Any) -> tuple[str, float, int]:
     """The plan under the safety monitor alone, then with the defaults
     (verdict, executed makespan, tasks done)."""
     from workcell import SimOptions, simulate
-    from workcell.sim.monitor import SafetyViolation
+    from workcell.sim.harness.monitor import SafetyViolation
 
     try:
         simulate(cc, plan, seed=0, options=SimOptions(geometry_guard=False))

@@ -5,21 +5,21 @@ Three parts, side by side in one run:
 1. **Contention rounds** (batch simulators): every round starts at a sampling
    tick; the coordinator (station 0) has a trajectory frame of 26 + 2 + 24 p
    bytes (p = 1..5), each robot a 51-byte position report, each present with
-   probability ``load``. CSMA/DCR (:func:`~workcell.sim.network.dcr_rounds`)
-   and Ethernet CSMA/CD (:func:`~workcell.sim.network.ethernet_rounds`,
+   probability ``load``. CSMA/DCR (:func:`~workcell.sim.comms.dcr_rounds`)
+   and Ethernet CSMA/CD (:func:`~workcell.sim.comms.ethernet_rounds`,
    numba) over stations x load; p50, p99 and max delay against
    :func:`workcell.dcr_bound` for the same station count, and the share of
    frames over it. At 10 stations and full load both run ``--big`` rounds
    (10^6 by default).
-2. **Event-level media** (:func:`workcell.sim.network.make_medium`): the same
+2. **Event-level media** (:func:`workcell.sim.comms.make_medium`): the same
    traffic, one round per 1 ms sampling period with up to 20 us of jitter,
    for ``--ticks`` periods, on CSMA/DCR, Ethernet, Multibus II, serial star
    and serial bus (9600 b/s). A medium that cannot carry the traffic builds
    a queue: its delays grow with the run's length.
 3. **Makespan of one cell and schedule over each medium**, with
-   ``workcell.simulate`` (needs :mod:`workcell.sim.run`), and under the
+   ``workcell.simulate`` (needs :mod:`workcell.sim.harness.simulate`), and under the
    SUPERSIGMA central unit and MICROBUS
-   (:func:`workcell.sim.supersigma.run_schedule`: tasks as stepper moves,
+   (:func:`workcell.sim.control.supersigma.run_schedule`: tasks as stepper moves,
    zone hand-overs as flags).
 
 A plot of the delay tails (complementary CDF) goes to
@@ -48,9 +48,7 @@ import numpy as np
 
 from benchmarks.common import output_dir, publish, run_table_sweep, sweep_arguments
 from multiarm.types import FloatArray
-from workcell.sim.kernel import Kernel
-from workcell.sim.medium import Frame, trajectory_bytes
-from workcell.sim.network import (
+from workcell.sim.comms import (
     MEDIA,
     REDUCED,
     dcr_bound,
@@ -58,6 +56,8 @@ from workcell.sim.network import (
     ethernet_rounds,
     make_medium,
 )
+from workcell.sim.comms.medium import Frame, trajectory_bytes
+from workcell.sim.events.loop import EventLoop
 
 NAME = "network"
 SEED = 0
@@ -149,7 +149,7 @@ def variants_part(rounds: int, seed: int = SEED) -> list[dict[str, Any]]:
 
 def event_delays(name: str, n: int, load: float, ticks: int, seed: int) -> tuple[FloatArray, int]:
     """Delays of one event-level run: a round per 1 ms period, jitter 20 us."""
-    k = Kernel()
+    k = EventLoop()
     m = make_medium(name, k, n, seed=seed)
     rng = np.random.default_rng(seed)
     period, jitter = 1e-3, 20e-6
@@ -197,11 +197,11 @@ def event_part(
 
 
 def makespan_part(quick: bool, seed: int = SEED) -> tuple[list[dict[str, Any]], str]:
-    """The same cell and schedule over every medium (needs workcell.sim.run),
+    """The same cell and schedule over every medium (needs workcell.sim.harness.simulate),
     and under the SUPERSIGMA central unit (``run_schedule``)."""
     import scheduler
     import workcell
-    from workcell.sim.supersigma import run_schedule
+    from workcell.sim.control.supersigma import run_schedule
 
     cell = workcell.load_example(CELL)
     compiled = workcell.compile_cell(cell)
@@ -225,11 +225,15 @@ def makespan_part(quick: bool, seed: int = SEED) -> tuple[list[dict[str, Any]], 
         }
     )
     print(rows[-1], flush=True)
-    if importlib.util.find_spec("workcell.sim.run") is None:
-        return rows, "workcell.sim.run (workcell.simulate) is not available in this checkout"
+    if importlib.util.find_spec("workcell.sim.harness.simulate") is None:
+        return (
+            rows,
+            "workcell.sim.harness.simulate (workcell.simulate) is not available in this checkout",
+        )
     # imported by name: the simulation is another module's concern
     simulate: Any = (
-        getattr(workcell, "simulate", None) or importlib.import_module("workcell.sim.run").simulate
+        getattr(workcell, "simulate", None)
+        or importlib.import_module("workcell.sim.harness.simulate").simulate
     )
     for name in ("ideal", "csma-dcr") if quick else MEDIA:
         t0 = time.perf_counter()
@@ -461,7 +465,7 @@ def main(argv: list[str] | None = None) -> None:
         lines += [
             f"Cell `{CELL}`, greedy schedule (seed 0), `workcell.simulate(..., medium=name)`; "
             "the first row runs the same schedule as a task program on the SUPERSIGMA "
-            "central unit (`workcell.sim.supersigma.run_schedule`: messages = MICROBUS "
+            "central unit (`workcell.sim.control.supersigma.run_schedule`: messages = MICROBUS "
             "commands, each holding the bus 100 us).",
             "",
             "| medium | planned (s) | executed (s) | messages | p99 delay (ms) "

@@ -45,9 +45,9 @@ from benchmarks.common import table_main
 from multiarm.errors import MultiarmError
 from scheduler import solve, validate
 from workcell import compile_cell, load_example
-from workcell.sim.faults import FaultPlan
-from workcell.sim.options import SimOptions
-from workcell.sim.run import simulate
+from workcell.sim.harness.faults import FaultPlan
+from workcell.sim.harness.options import SimOptions
+from workcell.sim.harness.simulate import simulate
 
 NAME = "sim"
 EVENT_TARGET = 2000.0

@@ -5,7 +5,7 @@ Two workloads, the same on both kernels, with the same seeded delays:
 * **callbacks** -- ``chains`` independent timer chains; each callback
   schedules the next one of its chain after a seeded random delay (what the
   network media do: frame ends, collision ends, backoff timers). Our kernel:
-  ``Kernel.schedule(delay, cb)``; SimPy: ``env.timeout(delay)`` with the
+  ``EventLoop.schedule(delay, cb)``; SimPy: ``env.timeout(delay)`` with the
   callback appended to the event's callback list (the cheapest way to run a
   plain callback in SimPy).
 * **processes** -- ``procs`` generator processes, each looping over
@@ -32,7 +32,7 @@ import numpy as np
 import simpy
 
 from benchmarks.common import table_main
-from workcell.sim.kernel import Kernel
+from workcell.sim.events.loop import EventLoop
 
 NAME = "simkernel"
 SEED = 0
@@ -44,7 +44,7 @@ def _delays(n: int, seed: int = SEED) -> list[float]:
 
 
 def ours_callbacks(events: int, chains: int, seed: int = SEED) -> int:
-    k = Kernel()
+    k = EventLoop()
     delays = _delays(events, seed)
     left = [events]
 
@@ -80,7 +80,7 @@ def simpy_callbacks(events: int, chains: int, seed: int = SEED) -> int:
 
 
 def ours_processes(events: int, procs: int, seed: int = SEED) -> int:
-    k = Kernel()
+    k = EventLoop()
     delays = _delays(events, seed)
     per = events // procs
     count = [0]

@@ -7,7 +7,8 @@
   returns a :class:`Result`; :func:`validate` checks any :class:`Schedule`
   against every constraint and returns its makespan; :func:`lower_bound`
   bounds the optimum.
-* :func:`reschedule` re-solves from a state of the cell (online).
+* :func:`reschedule` re-solves during execution from what a coordinator
+  knows (tasks done, running, failed; arms out; parts late).
 """
 
 from scheduler.bounds import LowerBounds, lower_bound, lower_bounds
@@ -23,6 +24,7 @@ from scheduler.io import (
 )
 from scheduler.plan import Plan
 from scheduler.problem import BlockingOracle, HasProblem, Model, Problem, ProblemLike, Window
+from scheduler.reschedule import FrozenTask, Rescheduled, reschedule
 from scheduler.result import Progress, Result, SearchStats, SolveStatus
 from scheduler.schedule import Reservation, Schedule, ScheduleError, validate
 from scheduler.setup import FunctionSetup, MatrixSetup, NoSetup, Setup, TravelSetup
@@ -34,6 +36,7 @@ __all__ = [
     "SOLVERS",
     "BlockingOracle",
     "CpSatOptions",
+    "FrozenTask",
     "FunctionSetup",
     "GreedyOptions",
     "HasProblem",
@@ -45,6 +48,7 @@ __all__ = [
     "Problem",
     "ProblemLike",
     "Progress",
+    "Rescheduled",
     "Reservation",
     "Result",
     "Schedule",
@@ -64,6 +68,7 @@ __all__ = [
     "parse_fjsp",
     "problem_from_dict",
     "read_fjsp",
+    "reschedule",
     "save_problem",
     "schedule_from_dict",
     "solve",

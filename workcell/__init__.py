@@ -37,7 +37,8 @@ from workcell.compile import (
 from workcell.compiled import CompiledMode, CompileOptions
 from workcell.oracle import CellOracle
 from workcell.pipeline import CellRun, RunStatus, SolvedCell, run_cell, solve_cell
-from workcell.sim.faults import (
+from workcell.sim.comms.dcr import dcr_bound
+from workcell.sim.harness.faults import (
     ActivateZones,
     ArmFailure,
     Crash,
@@ -47,9 +48,8 @@ from workcell.sim.faults import (
     LostSync,
     MessageLoss,
 )
-from workcell.sim.network.dcr import dcr_bound
-from workcell.sim.options import SimOptions
-from workcell.sim.run import SimResult, simulate
+from workcell.sim.harness.options import SimOptions
+from workcell.sim.harness.simulate import SimResult, simulate
 
 __all__ = [
     "EXAMPLES",

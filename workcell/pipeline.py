@@ -61,9 +61,9 @@ from scheduler.tree import TreeOptions
 from workcell.cell import EXAMPLES, Cell, load_cell, load_example
 from workcell.compile import CompiledCell, compile_cell
 from workcell.compiled import CompileOptions
-from workcell.sim.faults import Fault, FaultPlan, as_plan
-from workcell.sim.options import SimOptions
-from workcell.sim.run import MediumSpec, SimResult, simulate
+from workcell.sim.harness.faults import Fault, FaultPlan, as_plan
+from workcell.sim.harness.options import SimOptions
+from workcell.sim.harness.simulate import MediumSpec, SimResult, simulate
 
 if TYPE_CHECKING:
     from scheduler.solve import SolverName

@@ -13,7 +13,7 @@ Examples
 (['left', 'right'], True)
 >>> arm_colours(["right", "left"])["left"] == c["right"]  # by position in the arm order
 True
->>> from workcell.sim.trace import TraceEvent
+>>> from workcell.sim.events.trace import TraceEvent
 >>> fault_kind(TraceEvent(3.0, "fault", arm="left", detail="arm failure"))
 'arm_failure'
 """
@@ -118,7 +118,7 @@ FAULT_MARKS: dict[str, FaultMark] = {
     "other": FaultMark("P", "other fault", 8.0),
 }
 """Marker and legend label per fault kind (the ``kind`` of the fault records
-of :mod:`workcell.sim.faults`, ``"zone_activation"`` for
+of :mod:`workcell.sim.harness.faults`, ``"zone_activation"`` for
 ``activate_zones``, ``"other"`` for a fault record the plots do not know)."""
 
 
@@ -127,7 +127,7 @@ def fault_kind(event: Any) -> str | None:
 
     Parameters
     ----------
-    event : workcell.sim.trace.TraceEvent
+    event : workcell.sim.events.trace.TraceEvent
         A record of a run's trace.
 
     Returns

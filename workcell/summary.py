@@ -21,7 +21,7 @@ import numpy as np
 
 from scheduler import Problem, Schedule
 from workcell.compile import CompiledCell
-from workcell.sim.run import SimResult
+from workcell.sim.harness.simulate import SimResult
 
 __all__ = [
     "ArmUsage",
@@ -125,7 +125,7 @@ def insertion_tries(compiled: CompiledCell, schedule: Schedule, sim: SimResult) 
     (int, int)
         Planned, made.
     """
-    from workcell.sim.force import insert_searches
+    from workcell.sim.control.force import insert_searches
 
     searches = insert_searches(compiled, 0)
     per_mode = {m: sum(s.planned for s in ss) for m, ss in searches.items()}

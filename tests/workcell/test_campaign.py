@@ -31,8 +31,8 @@ from workcell.campaign import (
 )
 from workcell.cli import main
 from workcell.experiments import parse_sweep
-from workcell.sim.faults import ArmFailure, FaultPlan, LatePart
-from workcell.sim.network import MEDIA
+from workcell.sim.comms import MEDIA
+from workcell.sim.harness.faults import ArmFailure, FaultPlan, LatePart
 
 SMALL = ("supersigma", "scara4")
 
@@ -378,13 +378,10 @@ def test_campaign_findings_replay_clean(cell: str, index: int, what: str) -> Non
     assert result.findings == (), what
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open finding (issue 16): a part late from its expected arrival (not time 0) "
-    "does not hold back a task whose start the arm already holds; the coordinator learns of "
-    "the delay at the expected time and its withdrawal arrives over Ethernet after the start",
-)
 def test_a_part_late_at_its_expected_arrival_holds_back_its_task() -> None:
-    # multiarm campaign scara4 --replay 0:69: place_housing1 starts at 10.0001 s,
-    # its part housing1 (expected at 10 s) arrives at 114.8 s
+    # multiarm campaign scara4 --replay 0:69 (was a finding): two parts late at
+    # their expected arrival (10 s); the first notice re-dispatched tasks, and
+    # place_housing1 went out with its start permitted before the second
+    # notice (housing1, arriving at 114.8 s) held it back; over Ethernet the
+    # withdrawal came after the start. Both notices now move the releases first.
     assert replay("scara4", 0, 69).findings == ()

@@ -25,7 +25,7 @@ from workcell import CompileOptions, compile_cell, load_example, simulate
 from workcell.compile import CompiledCell
 from workcell.detours import DetourComparison, compare_detours, plan_detours
 from workcell.geometry import ObstacleSet, check_path
-from workcell.sim.options import SimOptions
+from workcell.sim.harness.options import SimOptions
 
 EVALUATIONS = 2000
 

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from multiarm.errors import UsageError, ValidationError
 from scheduler import Schedule, solve
 from workcell import CompiledCell, compile_cell, load_example, simulate
-from workcell.sim.trace import Trace
+from workcell.sim.events.trace import Trace
 from workcell.viz import (
     arm_colours,
     arm_joints,

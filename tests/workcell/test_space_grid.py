@@ -17,7 +17,7 @@ from multiarm.errors import ValidationError
 from scheduler import solve
 from workcell import SimOptions, compile_cell, load_example, simulate
 from workcell.geometry.reach import block_name, shared_blocks
-from workcell.sim.monitor import SafetyViolation
+from workcell.sim.harness.monitor import SafetyViolation
 
 
 @pytest.mark.parametrize("name", ["supersigma", "scara4"])

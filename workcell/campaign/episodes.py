@@ -2,7 +2,7 @@
 
 An *episode* is a cell, a seed and an index: from them (and nothing else) it
 draws a fault plan of 1-4 records over every fault kind the simulator knows
-(:mod:`workcell.sim.faults`), a medium (:data:`workcell.sim.network.MEDIA`),
+(:mod:`workcell.sim.harness.faults`), a medium (:data:`workcell.sim.comms.MEDIA`),
 a coordination policy and re-solving on or off (:func:`draw_episode`). Fault
 times are uniform over the plan, or exactly at, or a hair
 (:data:`HAIRS`) before or after, a planned task start or end. Each cell is
@@ -13,7 +13,7 @@ search on a work limit, so the plan is the same on every machine).
 
 * ``exception`` -- :func:`workcell.simulate` raised (type and message);
 * ``safety`` -- the safety monitor raised
-  :class:`~workcell.sim.monitor.SafetyViolation`;
+  :class:`~workcell.sim.harness.monitor.SafetyViolation`;
 * ``unexplained_failure`` -- a failed task whose cause is empty, the fallback
   "not completed when the simulation ended", a stall, or a deadlock named
   without its wait-for cycle;
@@ -49,7 +49,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from multiarm.errors import UsageError
-from workcell.sim.faults import (
+from workcell.sim.harness.faults import (
     ActivateZones,
     ArmFailure,
     Crash,
@@ -64,7 +64,7 @@ from workcell.sim.faults import (
 if TYPE_CHECKING:
     from scheduler import Schedule
     from workcell.compile import CompiledCell
-    from workcell.sim.run import SimResult
+    from workcell.sim.harness.simulate import SimResult
 
 __all__ = [
     "COORDINATIONS",
@@ -96,7 +96,7 @@ FAULT_KINDS: tuple[str, ...] = (
     "emergency_stop",
     "activate_zones",
 )
-"""Every fault kind the simulator knows (:mod:`workcell.sim.faults`)."""
+"""Every fault kind the simulator knows (:mod:`workcell.sim.harness.faults`)."""
 
 COORDINATIONS: tuple[str, ...] = ("centralized",)
 """The coordination policies an episode can draw (S2.7's centralized one)."""
@@ -156,11 +156,11 @@ class CampaignCell:
     release : tuple of float
         Each task's release in the problem (seconds).
     parts : tuple of str
-        Parts a :class:`~workcell.sim.faults.LatePart` may name.
+        Parts a :class:`~workcell.sim.harness.faults.LatePart` may name.
     steppers : tuple of (str, int)
-        (arm, axis) of every stepper axis (:class:`~workcell.sim.faults.LostSync`).
+        (arm, axis) of every stepper axis (:class:`~workcell.sim.harness.faults.LostSync`).
     zones : tuple of str
-        The SDL zones (:class:`~workcell.sim.faults.ActivateZones`).
+        The SDL zones (:class:`~workcell.sim.harness.faults.ActivateZones`).
     times : tuple of float
         Every distinct planned task start and end, sorted.
     """
@@ -270,7 +270,7 @@ class Episode:
     index : int
         The episode's number within the campaign.
     medium : str
-        One of :data:`workcell.sim.network.MEDIA`.
+        One of :data:`workcell.sim.comms.MEDIA`.
     coordination : str
         One of :data:`COORDINATIONS`.
     resolve : bool
@@ -376,7 +376,7 @@ def draw_episode(
         Together with the cell's name they decide every draw.
     media : sequence of str, optional
         The media to draw from (default: every one of
-        :data:`workcell.sim.network.MEDIA`).
+        :data:`workcell.sim.comms.MEDIA`).
     coordinations : sequence of str
         The coordination policies to draw from.
 
@@ -389,7 +389,7 @@ def draw_episode(
     UsageError
         A negative seed or index, an unknown medium or policy.
     """
-    from workcell.sim.network import MEDIA
+    from workcell.sim.comms import MEDIA
 
     for name, v in (("seed", seed), ("index", index)):
         if isinstance(v, bool) or not isinstance(v, int) or v < 0:
@@ -442,8 +442,8 @@ def simulate_episode(cc: CampaignCell, episode: Episode) -> SimResult:
     -------
     SimResult
     """
-    from workcell.sim.options import SimOptions
-    from workcell.sim.run import simulate
+    from workcell.sim.harness.options import SimOptions
+    from workcell.sim.harness.simulate import simulate
 
     return simulate(
         cc.compiled,
@@ -717,7 +717,7 @@ def run_episode(cc: CampaignCell, episode: Episode) -> EpisodeResult:
     -------
     EpisodeResult
     """
-    from workcell.sim.monitor import SafetyViolation
+    from workcell.sim.harness.monitor import SafetyViolation
 
     t0 = time.perf_counter()
     findings: list[Finding] = []

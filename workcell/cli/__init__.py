@@ -30,7 +30,7 @@ from __future__ import annotations
 
 from multiarm.errors import MultiarmError, UsageError
 from workcell.cli.main import build_parser, main
-from workcell.sim.faults import FaultPlan
+from workcell.sim.harness.faults import FaultPlan
 
 __all__ = ["build_parser", "main"]
 

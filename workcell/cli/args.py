@@ -85,7 +85,7 @@ def add_network(p: argparse.ArgumentParser) -> None:
         "--network",
         default="ideal",
         metavar="NAME",
-        help="the medium between coordinator and arms (workcell.sim.network.MEDIA)",
+        help="the medium between coordinator and arms (workcell.sim.comms.MEDIA)",
     )
 
 

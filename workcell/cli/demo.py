@@ -36,7 +36,7 @@ from workcell.pipeline import (
     run_solved,
     solve_limited,
 )
-from workcell.sim.options import SimOptions
+from workcell.sim.harness.options import SimOptions
 from workcell.summary import ArmUsage, ZoneUsage, arm_usage, run_summary, side_by_side, zone_usage
 
 __all__ = ["STEPS_PER_CELL", "add_arguments", "run"]

@@ -17,7 +17,7 @@ from scheduler import Problem, Schedule
 from workcell.cli import args as common
 from workcell.cli.output import EXIT_FAILURES, EXIT_OK, Progress, print_table, status_line
 from workcell.pipeline import MAX_FRAMES, CellRun, load_cell_or_example, load_faults, run_cell
-from workcell.sim.options import SimOptions
+from workcell.sim.harness.options import SimOptions
 from workcell.summary import run_summary
 
 __all__ = ["add_arguments", "run"]
@@ -139,7 +139,7 @@ def _print_run(result: CellRun, args: argparse.Namespace, out: Path) -> None:
 
 def _print_central_unit(problem: Problem, schedule: Schedule) -> None:
     """The plan as a SUPERSIGMA task program: one box per arm on the CCU (S1.1, S1.9)."""
-    from workcell.sim.supersigma.schedule import run_schedule
+    from workcell.sim.control.supersigma.schedule import run_schedule
 
     run_ = run_schedule(problem, schedule)
     rep = run_.report

@@ -95,7 +95,7 @@ Geometry = Literal["auto", "shapes"]
 
 
 class EventLike(Protocol):
-    """A record of a run's trace (:class:`workcell.sim.trace.TraceEvent`)."""
+    """A record of a run's trace (:class:`workcell.sim.events.trace.TraceEvent`)."""
 
     @property
     def time(self) -> float: ...

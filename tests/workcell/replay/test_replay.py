@@ -180,6 +180,20 @@ def test_page_is_self_contained_and_small(data: ReplayData, tmp_path: Path) -> N
     assert "crash" in page and "arm failure" in page  # the legend names the faults shown
 
 
+def test_sim_result_writes_its_own_page(
+    scara4_faulty_run: Any, data: ReplayData, tmp_path: Path
+) -> None:
+    """``SimResult.to_html(path)`` (issue 19): the run keeps its compiled cell,
+    so the page needs no other argument and holds the same replay."""
+    page = scara4_faulty_run.to_html(tmp_path / "run.html", max_frames=400)
+    text = page.read_text()
+    m = re.search(
+        r'<script type="application/json" id="multiarm-replay">(.*?)</script>', text, re.S
+    )
+    assert m is not None
+    assert ReplayData.from_json(m.group(1).replace("<\\/", "</")) == data
+
+
 def test_view_command_writes_the_page(
     scara4_run: Any, scara4_cc: Any, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

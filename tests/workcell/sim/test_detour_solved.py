@@ -31,8 +31,8 @@ from scheduler import solve
 from workcell import compile_cell, simulate
 from workcell.cell import load_cell
 from workcell.geometry import check_path, plan_detour
-from workcell.sim.monitor import SafetyMonitor
-from workcell.sim.trace import Trace
+from workcell.sim.events.trace import Trace
+from workcell.sim.harness.monitor import SafetyMonitor
 
 POLE = """
 [arms.pole]
@@ -64,7 +64,7 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         found.append((args, kwargs, res))
         return res
 
-    mp.setattr("workcell.sim.coordinator.plan_detour", spy)
+    mp.setattr("workcell.sim.coordination.geometric.plan_detour", spy)
     try:
         result = simulate(cc, plan, seed=0)  # the live safety monitor is on
     finally:
@@ -93,19 +93,17 @@ def test_a_parked_arm_in_the_way_gets_a_planned_detour(run: dict[str, Any]) -> N
 def test_the_arm_follows_the_planned_path_and_the_task_completes(run: dict[str, Any]) -> None:
     r = run["result"]
     (_args, _kwargs, res) = next(x for x in run["found"] if x[2].status == "solved")
-    se = next(c for c in r._arms if c.name == "se")
-    legs = [rec for rec in se.motion if rec[2] is not None and rec[2].kind == "detour"]
+    se = next(c for c in r.arm_logs if c.name == "se")
+    legs = [rec for rec in se.records if rec.leg is not None and rec.leg.kind == "detour"]
     assert legs, "the detour leg was never executed"
-    leg = legs[0][2]
+    leg = legs[0].leg
     # the executed leg is the OMPL path timed with the arm's drives ...
     knots = leg.trajectory.sample(np.asarray(leg.trajectory.knot_times))
     assert np.allclose(knots, res.path, atol=1e-9)
     # ... driven from its start to its end
-    assert sum(t1 - t0 for t0, t1, _l, _tau, moving, _x in legs if moving) == pytest.approx(
-        leg.duration, abs=1e-9
-    )
+    assert sum(r.end - r.start for r in legs if r.moving) == pytest.approx(leg.duration, abs=1e-9)
     ev = next(e for e in r.trace if e.kind == "detour" and "alternative" in e.detail)
-    assert legs[0][0] == pytest.approx(ev.time, abs=1e-12)
+    assert legs[0].start == pytest.approx(ev.time, abs=1e-12)
     # the detoured task goes on from the station and completes, as do all the others
     task = ev.task
     tf = r.tasks_frame().set_index("task")
@@ -119,9 +117,9 @@ def test_the_safety_monitor_watched_the_detour_and_stayed_quiet(run: dict[str, A
     r = run["result"]
     assert not [e for e in r.trace if e.kind == "monitor"]
     assert r.monitor is not None and r.monitor.samples > 0
-    se = next(c for c in r._arms if c.name == "se")
-    detour = next(rec for rec in se.motion if rec[2] is not None and rec[2].kind == "detour")
-    assert detour[1] - detour[0] > 2 * 0.02  # several samples while the detour ran
+    se = next(c for c in r.arm_logs if c.name == "se")
+    detour = next(rec for rec in se.records if rec.leg is not None and rec.leg.kind == "detour")
+    assert detour.end - detour.start > 2 * 0.02  # several samples while the detour ran
     # the post-run form of the monitor agrees: no contact, no broken invariant
-    t_end = max(rec[1] for c in r._arms for rec in c.motion)
-    SafetyMonitor(run["cc"], 0.02).check(r._arms, t_end, Trace())
+    t_end = max(rec.end for c in r.arm_logs for rec in c.records)
+    SafetyMonitor(run["cc"], 0.02).check(r.arm_logs, t_end, Trace())

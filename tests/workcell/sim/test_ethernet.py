@@ -10,9 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from multiarm.errors import ValidationError
-from workcell.sim.kernel import Kernel
-from workcell.sim.medium import Frame
-from workcell.sim.network import (
+from workcell.sim.comms import (
     REDUCED,
     EthernetMedium,
     EthernetParams,
@@ -22,6 +20,8 @@ from workcell.sim.network import (
     ethernet_rounds,
     min_slot_time,
 )
+from workcell.sim.comms.medium import Frame
+from workcell.sim.events.loop import EventLoop
 
 
 class SpyRng:
@@ -40,8 +40,8 @@ class SpyRng:
 
 def _all_at_once(
     n: int, mode: Any, seed: int = 0, sizes: list[int] | None = None
-) -> tuple[Kernel, EthernetMedium, list[str]]:
-    k = Kernel()
+) -> tuple[EventLoop, EthernetMedium, list[str]]:
+    k = EventLoop()
     m = EthernetMedium(k, np.linspace(0.0, 100.0, n), mode=mode, seed=seed)
     dropped: list[str] = []
     m.on_drop(lambda f, why: dropped.append(why))
@@ -112,7 +112,7 @@ def test_event_dcr_never_exceeds_bound(
 ) -> None:
     # one frame per station, sent at random instants within `spread` seconds
     n = len(positions)
-    k = Kernel()
+    k = EventLoop()
     rng = np.random.default_rng(order_seed)
     order = list(rng.permutation(n))
     m = EthernetMedium(
@@ -137,7 +137,7 @@ def test_event_dcr_is_close_to_the_bound_for_the_paper_case() -> None:
 
 
 def test_dcr_resolution_follows_the_fixed_order() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = EthernetMedium(k, [0.0, 30.0, 60.0, 90.0], mode="csma_dcr", order=[2, 0, 3, 1])
     sent: list[int] = []
     for s in range(4):
@@ -208,7 +208,7 @@ def test_ethernet_batch_drops_after_16_attempts() -> None:
 
 # -------------------------------------------------------- transmit chain --
 def test_urgent_frame_goes_second_not_first() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = EthernetMedium(k, [0.0, 100.0], mode="csma_dcr")
     order: list[str] = []
     m.attach(1, lambda f, t: order.append(f.kind))
@@ -220,7 +220,7 @@ def test_urgent_frame_goes_second_not_first() -> None:
 
 
 def test_fifo_chain_keeps_arrival_order() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = EthernetMedium(k, [0.0, 100.0], mode="csma_cd")
     order: list[str] = []
     m.attach(1, lambda f, t: order.append(f.kind))

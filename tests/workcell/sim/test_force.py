@@ -17,7 +17,7 @@ from scheduler import solve
 from tasklib.steps import ForceSearch
 from workcell import CompileOptions, compile_cell, load_example
 from workcell.sim import Crash, EmergencyStop, FaultPlan, SimOptions, simulate
-from workcell.sim.force import (
+from workcell.sim.control.force import (
     CRASH_FORCE,
     FREE_THRESHOLD,
     ForceSensor,
@@ -26,7 +26,7 @@ from workcell.sim.force import (
     task_rng,
     tries_needed,
 )
-from workcell.sim.trace import KINDS
+from workcell.sim.events.trace import KINDS
 
 TASK = "insert_pin"
 

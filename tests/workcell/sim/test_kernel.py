@@ -5,11 +5,11 @@ from __future__ import annotations
 import pytest
 
 from multiarm.errors import UsageError
-from workcell.sim.kernel import Event, Kernel, ProcessGenerator
+from workcell.sim.events.loop import Event, EventLoop, ProcessGenerator
 
 
 def test_time_order_then_priority_then_schedule_order() -> None:
-    k = Kernel()
+    k = EventLoop()
     trace: list[str] = []
     k.schedule(2.0, trace.append, "t2")
     k.schedule(1.0, trace.append, "t1-second", priority=1)
@@ -23,7 +23,7 @@ def test_time_order_then_priority_then_schedule_order() -> None:
 
 
 def _trace_of(seed_order: list[float]) -> list[tuple[float, int]]:
-    k = Kernel()
+    k = EventLoop()
     out: list[tuple[float, int]] = []
     for i, t in enumerate(seed_order):
         k.schedule(t, lambda i=i: out.append((k.now, i)))
@@ -40,7 +40,7 @@ def test_same_inputs_same_trace() -> None:
 
 
 def test_cancel() -> None:
-    k = Kernel()
+    k = EventLoop()
     trace: list[int] = []
     h = k.schedule(1.0, trace.append, 1)
     k.schedule(2.0, trace.append, 2)
@@ -51,7 +51,7 @@ def test_cancel() -> None:
 
 
 def test_handle_fields() -> None:
-    k = Kernel()
+    k = EventLoop()
     h = k.schedule(1.5, print, "x", priority=3)
     h2 = k.schedule(0.5, print)
     assert (h.time, h.priority, h.seq, h.callback, h.args) == (1.5, 3, 0, print, ("x",))
@@ -67,7 +67,7 @@ def test_handle_fields() -> None:
 
 
 def test_until_stops_and_sets_clock() -> None:
-    k = Kernel()
+    k = EventLoop()
     trace: list[int] = []
     k.schedule(1.0, trace.append, 1)
     k.schedule(3.0, trace.append, 3)
@@ -78,7 +78,7 @@ def test_until_stops_and_sets_clock() -> None:
 
 
 def test_past_and_bad_arguments_refused() -> None:
-    k = Kernel(start=5.0)
+    k = EventLoop(start=5.0)
     with pytest.raises(UsageError, match="past"):
         k.schedule(-1.0, print)
     with pytest.raises(UsageError, match="past"):
@@ -90,7 +90,7 @@ def test_past_and_bad_arguments_refused() -> None:
 
 
 def test_processes_wait_on_delays_and_events() -> None:
-    k = Kernel()
+    k = EventLoop()
     ev = k.event()
     log: list[tuple[str, float, object]] = []
 
@@ -113,7 +113,7 @@ def test_processes_wait_on_delays_and_events() -> None:
 
 
 def test_process_waiting_on_process() -> None:
-    k = Kernel()
+    k = EventLoop()
 
     def child() -> ProcessGenerator:
         yield 1.0
@@ -129,7 +129,7 @@ def test_process_waiting_on_process() -> None:
 
 
 def test_event_fires_once_and_bad_yield() -> None:
-    k = Kernel()
+    k = EventLoop()
     ev = Event(k)
     ev.succeed()
     with pytest.raises(UsageError, match="already fired"):
@@ -158,7 +158,7 @@ class FakeClock:
 
 def test_realtime_pacing_with_injected_clock() -> None:
     fc = FakeClock()
-    k = Kernel(clock=fc.clock, sleep=fc.sleep)
+    k = EventLoop(clock=fc.clock, sleep=fc.sleep)
     seen: list[tuple[float, float]] = []
     for t in (1.0, 2.0, 4.0):
         k.schedule(t, lambda: seen.append((k.now, fc.t)))
@@ -170,7 +170,7 @@ def test_realtime_pacing_with_injected_clock() -> None:
 
 def test_realtime_does_not_sleep_when_behind() -> None:
     fc = FakeClock()
-    k = Kernel(clock=fc.clock, sleep=fc.sleep)
+    k = EventLoop(clock=fc.clock, sleep=fc.sleep)
 
     def slow() -> None:
         fc.t += 10.0  # the callback itself takes 10 s of wall time

@@ -7,8 +7,8 @@ from collections.abc import Callable
 import pytest
 
 from multiarm.errors import ValidationError
-from workcell.sim.kernel import Kernel
-from workcell.sim.medium import (
+from workcell.sim.comms import MultibusII, SerialBus, SerialStar, unsolicited_count
+from workcell.sim.comms.medium import (
     BROADCAST,
     FixedLatencyMedium,
     Frame,
@@ -16,7 +16,7 @@ from workcell.sim.medium import (
     Medium,
     trajectory_bytes,
 )
-from workcell.sim.network import MultibusII, SerialBus, SerialStar, unsolicited_count
+from workcell.sim.events.loop import EventLoop
 
 
 def _collect(m: Medium, stations: range) -> list[tuple[int, int, str, float]]:
@@ -34,7 +34,7 @@ def _recorder(got: list[tuple[int, int, str, float]], s: int) -> Callable[[Frame
 
 
 def test_ideal_and_fixed_latency() -> None:
-    k = Kernel()
+    k = EventLoop()
     ideal = IdealMedium(k, 3)
     fixed = FixedLatencyMedium(k, 3, latency=0.25)
     assert isinstance(ideal, Medium) and isinstance(fixed, Medium)
@@ -54,7 +54,7 @@ def test_frame_and_station_validation() -> None:
         Frame(0, 1, 0)
     with pytest.raises(ValidationError, match="both 1"):
         Frame(1, 1, 10)
-    k = Kernel()
+    k = EventLoop()
     m = IdealMedium(k, 2)
     with pytest.raises(ValidationError, match="station 5"):
         m.send(Frame(0, 5, 10))
@@ -67,12 +67,12 @@ def test_frame_and_station_validation() -> None:
 
 @pytest.mark.parametrize("rate", [9600.0, 19200.0, 115200.0])
 def test_serial_line_time_is_ten_bits_per_byte(rate: float) -> None:
-    k = Kernel()
+    k = EventLoop()
     m = SerialStar(k, 3, rate=rate, header_bytes=0)
     m.send(Frame(1, 0, 51, "position"))
     k.run()
     assert m.stats.max() == pytest.approx(51 * 10 / rate)
-    k2 = Kernel()
+    k2 = EventLoop()
     m2 = SerialStar(k2, 3, rate=rate, header_bytes=4)
     m2.send(Frame(1, 0, 51, "position"))
     k2.run()
@@ -80,7 +80,7 @@ def test_serial_line_time_is_ten_bits_per_byte(rate: float) -> None:
 
 
 def test_serial_star_fifo_per_line_and_full_duplex() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = SerialStar(k, 3, rate=10_000.0, header_bytes=0)
     got = _collect(m, range(3))
     m.send(Frame(1, 0, 100, "a"))  # 0.1 s on line 1 up
@@ -93,7 +93,7 @@ def test_serial_star_fifo_per_line_and_full_duplex() -> None:
 
 
 def test_serial_star_relays_between_robots() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = SerialStar(k, 3, rate=10_000.0, header_bytes=0)
     got = _collect(m, range(3))
     m.send(Frame(1, 2, 50, "x"))
@@ -103,7 +103,7 @@ def test_serial_star_relays_between_robots() -> None:
 
 
 def test_serial_bus_is_shared() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = SerialBus(k, 4, rate=10_000.0, header_bytes=0)
     got = _collect(m, range(4))
     m.send(Frame(1, 0, 50, "a"))
@@ -114,7 +114,7 @@ def test_serial_bus_is_shared() -> None:
 
 def test_multibus_splits_into_20_byte_unsolicited_messages() -> None:
     assert [unsolicited_count(n) for n in (1, 20, 21, 51, 60, 61)] == [1, 1, 2, 3, 3, 4]
-    k = Kernel()
+    k = EventLoop()
     m = MultibusII(k, 3, arbitration=0.0, mpc_latency=0.0)
     m.send(Frame(1, 0, 51, "position"))
     k.run()
@@ -126,7 +126,7 @@ def test_multibus_splits_into_20_byte_unsolicited_messages() -> None:
 
 
 def test_multibus_trajectory_is_solicited_and_alarm_broadcast() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = MultibusII(k, 4)
     got = _collect(m, range(4))
     m.send(Frame(0, 1, 148, "trajectory"))
@@ -139,7 +139,7 @@ def test_multibus_trajectory_is_solicited_and_alarm_broadcast() -> None:
 
 
 def test_multibus_queues_on_the_shared_bus() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = MultibusII(k, 3, arbitration=0.0, mpc_latency=0.0)
     m.send(Frame(1, 0, 20, "a"))
     m.send(Frame(2, 0, 20, "b"))

@@ -1,4 +1,4 @@
-"""The live safety monitor (workcell.sim.monitor.LiveMonitor; S2.5-S2.7, S2.12).
+"""The live safety monitor (workcell.sim.harness.monitor.LiveMonitor; S2.5-S2.7, S2.12).
 
 It runs inside the simulation as a kernel process and stops the run at the
 first violating sample; the post-run check (``monitor="post"``) reads the
@@ -21,7 +21,7 @@ from scheduler import Schedule, solve
 from workcell import SimOptions, compile_cell, load_example, simulate
 from workcell.geometry import CollisionWorld
 from workcell.sim import EmergencyStop
-from workcell.sim.monitor import SafetyMonitor, SafetyViolation, _segment_dist2
+from workcell.sim.harness.monitor import SafetyMonitor, SafetyViolation, segment_dist2
 
 PERIOD = 0.02
 
@@ -77,7 +77,7 @@ def _first_contact_by_fcl_alone(cc: Any, run: Any, until: float) -> float:
     times = np.arange(math.floor(until / PERIOD) + 1, dtype=np.float64) * PERIOD
     tfs = [
         arm.shape_transforms(SafetyMonitor.joints(c, times))
-        for arm, c in zip(cc.cell.arms, run._arms, strict=True)
+        for arm, c in zip(cc.cell.arms, run.arm_logs, strict=True)
     ]
     names = [arm.name for arm in cc.cell.arms]
     for i, t in enumerate(times):
@@ -138,14 +138,14 @@ def test_nominal_runs_pass_and_the_monitor_does_not_change_them(name: str) -> No
 
 def _moving_samples(result: Any, period: float) -> int:
     """Grid instants ``k * period`` at which some arm is moving (from the records)."""
-    t_end = max(rec[1] for c in result._arms for rec in c.motion)
+    t_end = max(rec.end for c in result.arm_logs for rec in c.records)
     k = np.arange(math.ceil(t_end / period) + 1)
     t = k * period
     moving = np.zeros(len(t), dtype=bool)
-    for c in result._arms:
-        for t0, t1, leg, _tau, run, _x in c.motion:
-            if leg is not None and run:
-                moving |= (t >= t0) & (t < t1)
+    for c in result.arm_logs:
+        for rec in c.records:
+            if rec.leg is not None and rec.moving:
+                moving |= (t >= rec.start) & (t < rec.end)
     return int(moving.sum())
 
 
@@ -157,10 +157,10 @@ def test_idle_stretches_cost_no_samples(supersigma: Any) -> None:
     r = simulate(supersigma, plan, seed=0, faults=[EmergencyStop(20.0, 200.0)])
     mon = r.monitor
     assert mon is not None
-    t_end = max(rec[1] for c in r._arms for rec in c.motion)
+    t_end = max(rec.end for c in r.arm_logs for rec in c.records)
     grid = math.ceil(t_end / PERIOD) + 1
     moving = _moving_samples(r, PERIOD)
-    records = sum(len(c.motion) for c in r._arms)
+    records = sum(len(c.records) for c in r.arm_logs)
     assert moving <= mon.samples <= moving + records + 1
     assert mon.samples < grid - 200.0 / PERIOD  # the stop cost no sample
     assert mon.wakes < mon.samples + 2 * r.metrics.events  # at most one wake per event
@@ -169,7 +169,7 @@ def test_idle_stretches_cost_no_samples(supersigma: Any) -> None:
 @njit(cache=False)
 def _many(p0: Any, p1: Any, q0: Any, q1: Any, out: Any) -> None:
     for i in range(p0.shape[0]):
-        out[i] = _segment_dist2(p0[i], p1[i], q0[i], q1[i])
+        out[i] = segment_dist2(p0[i], p1[i], q0[i], q1[i])
 
 
 def test_the_capsule_pre_test_never_overestimates_a_distance() -> None:

@@ -13,9 +13,7 @@ from hypothesis import strategies as st
 
 import workcell
 from multiarm.errors import ValidationError
-from workcell.sim.kernel import Kernel
-from workcell.sim.medium import Frame
-from workcell.sim.network import (
+from workcell.sim.comms import (
     REDUCED,
     EthernetMedium,
     EthernetParams,
@@ -23,6 +21,8 @@ from workcell.sim.network import (
     dcr_rounds,
     min_slot_time,
 )
+from workcell.sim.comms.medium import Frame
+from workcell.sim.events.loop import EventLoop
 
 US = 1e-6
 
@@ -130,7 +130,7 @@ def test_full_load_rounds_reach_the_bound_less_ifs_and_tau() -> None:
 def test_event_dcr_reduced_never_exceeds_bound(n: int, spread: float, seed: int) -> None:
     rng = np.random.default_rng(seed)
     positions = np.sort(rng.uniform(0.0, 100.0, n))
-    k = Kernel()
+    k = EventLoop()
     m = EthernetMedium(k, positions, mode="csma_dcr", params=EthernetParams(**REDUCED))
     for s in range(n):
         size = 148 if s == 0 else 51
@@ -146,7 +146,7 @@ def test_csma_cd_on_the_same_contention_breaks_the_bound() -> None:
     # sent at once, under binary exponential backoff
     worst = 0.0
     for seed in range(5):
-        k = Kernel()
+        k = EventLoop()
         m = EthernetMedium(k, np.linspace(0.0, 100.0, 10), mode="csma_cd", seed=seed)
         for s in range(10):
             m.send(Frame(s, (s + 1) % 10, 148 if s == 0 else 51))

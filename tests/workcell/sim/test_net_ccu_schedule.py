@@ -8,10 +8,10 @@ import pytest
 from multiarm.errors import ValidationError
 from scheduler import Problem, Schedule, solve
 from scheduler.generate import random_problem
-from workcell.sim.kernel import Kernel, ProcessGenerator
-from workcell.sim.supersigma import CCU, Box, Microbus, MotorController
-from workcell.sim.supersigma.microbus import move_time
-from workcell.sim.supersigma.schedule import MAX_STEPS, run_schedule, steps_for
+from workcell.sim.comms.microbus import move_time
+from workcell.sim.control.supersigma import CCU, Box, Microbus, MotorController
+from workcell.sim.control.supersigma.schedule import MAX_STEPS, run_schedule, steps_for
+from workcell.sim.events.loop import EventLoop, ProcessGenerator
 
 
 @pytest.fixture(scope="module")
@@ -81,7 +81,7 @@ def test_steps_for_inverts_the_profile() -> None:
 
 
 def test_flags_that_stay_set_and_wait_until() -> None:
-    k = Kernel()
+    k = EventLoop()
     bus = Microbus(k)
     bus.add(MotorController(1, "x"))
     ccu = CCU(k, bus, statement_time=0.0)

@@ -8,9 +8,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from workcell.sim.kernel import Kernel
-from workcell.sim.medium import Frame
-from workcell.sim.network import EthernetMedium, EthernetParams, dcr_bound, ethernet_rounds
+from workcell.sim.comms import EthernetMedium, EthernetParams, dcr_bound, ethernet_rounds
+from workcell.sim.comms.medium import Frame
+from workcell.sim.events.loop import EventLoop
 
 US = 1e-6
 
@@ -37,7 +37,7 @@ def test_standard_parameters() -> None:
 
 
 def _pair(params: EthernetParams, script: list[int], size: int = 28) -> list[float]:
-    k = Kernel()
+    k = EventLoop()
     m = EthernetMedium(k, [0.0, 100.0], mode="csma_cd", params=params)
     m._rng = ScriptedRng(script)  # type: ignore[assignment]
     m.send(Frame(0, 1, size))
@@ -72,7 +72,7 @@ def test_collision_jam_ifs_and_slot_timing(
 
 
 def test_deferral_waits_for_carrier_end_plus_ifs() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = EthernetMedium(k, [0.0, 100.0], mode="csma_cd", seed=0)
     m.send(Frame(0, 1, 148))
     k.schedule(10 * US, m.send, Frame(1, 0, 51))  # hears the carrier since 0.5 us
@@ -85,7 +85,7 @@ def test_deferral_waits_for_carrier_end_plus_ifs() -> None:
 
 
 def test_backoff_window_doubles_up_to_1024_then_sixteen_attempts_drop() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = EthernetMedium(k, [0.0, 100.0], mode="csma_cd")
     rng = ScriptedRng()  # always r = 0: the two collide again every time
     m._rng = rng  # type: ignore[assignment]
@@ -107,7 +107,7 @@ def test_backoff_window_doubles_up_to_1024_then_sixteen_attempts_drop() -> None:
 
 
 def test_attempt_limit_is_a_parameter() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = EthernetMedium(k, [0.0, 100.0], params=EthernetParams(max_attempts=3))
     rng = ScriptedRng()
     m._rng = rng  # type: ignore[assignment]
@@ -120,7 +120,7 @@ def test_attempt_limit_is_a_parameter() -> None:
 def test_a_station_after_a_success_starts_afresh() -> None:
     # the attempt counter is per frame: a frame sent after a collided one
     # has its backoff window start again at [0, 1]
-    k = Kernel()
+    k = EventLoop()
     m = EthernetMedium(k, [0.0, 100.0], mode="csma_cd")
     rng = ScriptedRng([0, 1, 0, 1])
     m._rng = rng  # type: ignore[assignment]
@@ -137,7 +137,7 @@ def test_a_station_after_a_success_starts_afresh() -> None:
 
 def test_backoff_draws_are_uniform_over_the_window() -> None:
     # the real generator: after collision n, r spans the whole [0, 2^n - 1]
-    k = Kernel()
+    k = EventLoop()
     n = 30
     m = EthernetMedium(k, np.linspace(0.0, 100.0, n), mode="csma_cd", seed=4)
     seen: dict[int, list[int]] = {}

@@ -1,4 +1,4 @@
-"""Media by name: workcell.sim.network.make_medium and MEDIA (S2.8, S2.9)."""
+"""Media by name: workcell.sim.comms.make_medium and MEDIA (S2.8, S2.9)."""
 
 from __future__ import annotations
 
@@ -7,9 +7,7 @@ from collections.abc import Callable
 import pytest
 
 from multiarm.errors import UsageError
-from workcell.sim.kernel import Kernel
-from workcell.sim.medium import BROADCAST, FixedLatencyMedium, Frame, IdealMedium, Medium
-from workcell.sim.network import (
+from workcell.sim.comms import (
     MEDIA,
     MEDIUM_PARAMS,
     EthernetMedium,
@@ -18,7 +16,9 @@ from workcell.sim.network import (
     SerialStar,
     make_medium,
 )
-from workcell.sim.network.serial import line_time
+from workcell.sim.comms.medium import BROADCAST, FixedLatencyMedium, Frame, IdealMedium, Medium
+from workcell.sim.comms.serial import line_time
+from workcell.sim.events.loop import EventLoop
 
 EXPECTED = {
     "ideal": IdealMedium,
@@ -53,7 +53,7 @@ def _recorder(log: list[tuple[int, int, str]], station: int) -> Callable[[Frame,
 
 @pytest.mark.parametrize("name", MEDIA)
 def test_every_medium_delivers_both_ways(name: str) -> None:
-    k = Kernel()
+    k = EventLoop()
     m = make_medium(name, k, 4, seed=1)
     assert isinstance(m, EXPECTED[name])
     assert isinstance(m, Medium)
@@ -74,7 +74,7 @@ def test_every_medium_delivers_both_ways(name: str) -> None:
 
 @pytest.mark.parametrize("name", MEDIA)
 def test_broadcast_from_the_coordinator_reaches_every_arm(name: str) -> None:
-    k = Kernel()
+    k = EventLoop()
     m = make_medium(name, k, [0, 1, 2, 3])
     seen: list[tuple[int, int, str]] = []
     for s in range(4):
@@ -86,25 +86,25 @@ def test_broadcast_from_the_coordinator_reaches_every_arm(name: str) -> None:
 
 def test_unknown_name_lists_the_choices() -> None:
     with pytest.raises(UsageError, match=r"unknown medium 'token-bus'; choose one of: ideal, "):
-        make_medium("token-bus", Kernel(), 3)
+        make_medium("token-bus", EventLoop(), 3)
     with pytest.raises(UsageError, match="serial-star, serial-bus"):
-        make_medium("", Kernel(), 3)
+        make_medium("", EventLoop(), 3)
 
 
 def test_names_are_normalised() -> None:
-    m = make_medium("CSMA_DCR", Kernel(), 3)
+    m = make_medium("CSMA_DCR", EventLoop(), 3)
     assert isinstance(m, EthernetMedium) and m.mode == "csma_dcr"
-    m2 = make_medium("Serial_Star", Kernel(), 3)
+    m2 = make_medium("Serial_Star", EventLoop(), 3)
     assert isinstance(m2, SerialStar)
 
 
 def test_unknown_parameter_names_the_accepted_ones() -> None:
     with pytest.raises(UsageError, match=r"'serial-bus': unknown parameter 'baud'; accepted: rate"):
-        make_medium("serial-bus", Kernel(), 3, baud=9600)
+        make_medium("serial-bus", EventLoop(), 3, baud=9600)
     with pytest.raises(UsageError, match=r"'ideal': unknown parameter 'latency'"):
-        make_medium("ideal", Kernel(), 3, latency=1.0)
+        make_medium("ideal", EventLoop(), 3, latency=1.0)
     with pytest.raises(UsageError, match="max_attempts"):  # CSMA/DCR never gives up
-        make_medium("csma-dcr", Kernel(), 3, max_attempts=4)
+        make_medium("csma-dcr", EventLoop(), 3, max_attempts=4)
 
 
 @pytest.mark.parametrize(
@@ -124,42 +124,42 @@ def test_unknown_parameter_names_the_accepted_ones() -> None:
 )
 def test_bad_values_are_usage_errors(name: str, params: dict[str, object], match: str) -> None:
     with pytest.raises(UsageError, match=match):
-        make_medium(name, Kernel(), 3, **params)
+        make_medium(name, EventLoop(), 3, **params)
 
 
 def test_bad_station_lists() -> None:
     with pytest.raises(UsageError, match=r"0\.\.n-1"):
-        make_medium("ethernet", Kernel(), [1, 2, 3])
+        make_medium("ethernet", EventLoop(), [1, 2, 3])
     with pytest.raises(UsageError, match=">= 2 stations"):
-        make_medium("serial-bus", Kernel(), 1)
+        make_medium("serial-bus", EventLoop(), 1)
 
 
 def test_parameters_reach_the_medium() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = make_medium("serial-bus", k, 3, rate=19200.0, header_bytes=0)
     m.send(Frame(src=1, dst=0, size=51, kind="position"))
     k.run()
     assert m.stats.max() == pytest.approx(line_time(51, 19200.0, 0))
-    e = make_medium("csma-dcr", Kernel(), 5, bus_length=400.0, ifs=3.2e-6, rate=20e6)
+    e = make_medium("csma-dcr", EventLoop(), 5, bus_length=400.0, ifs=3.2e-6, rate=20e6)
     assert isinstance(e, EthernetMedium)
     assert e.tau == pytest.approx(400.0 / 2e8)
     assert e.params.ifs == 3.2e-6 and e.params.rate == 20e6
     assert e.positions[0] == 0.0  # the coordinator at one end
-    mb = make_medium("multibus2", Kernel(), 3, unsolicited_payload=10)
+    mb = make_medium("multibus2", EventLoop(), 3, unsolicited_payload=10)
     assert isinstance(mb, MultibusII) and mb.payload == 10
 
 
 def test_chain_order_defaults() -> None:
-    dcr = make_medium("csma-dcr", Kernel(), 3)
-    cd = make_medium("ethernet", Kernel(), 3)
+    dcr = make_medium("csma-dcr", EventLoop(), 3)
+    cd = make_medium("ethernet", EventLoop(), 3)
     assert isinstance(dcr, EthernetMedium) and isinstance(cd, EthernetMedium)
     assert dcr.chains[0].by_priority and not cd.chains[0].by_priority
-    cd2 = make_medium("ethernet", Kernel(), 3, priority_chain=True)
+    cd2 = make_medium("ethernet", EventLoop(), 3, priority_chain=True)
     assert isinstance(cd2, EthernetMedium) and cd2.chains[0].by_priority
 
 
 def test_serial_star_hub_is_station_zero() -> None:
-    k = Kernel()
+    k = EventLoop()
     m = make_medium("serial-star", k, 3, header_bytes=0)
     m.send(Frame(src=1, dst=2, size=50, kind="position"))  # relayed by the coordinator
     k.run()
@@ -167,7 +167,7 @@ def test_serial_star_hub_is_station_zero() -> None:
 
 
 def _ethernet_delays(seed: int) -> list[float]:
-    k = Kernel()
+    k = EventLoop()
     m = make_medium("ethernet", k, 6, seed=seed)
     for s in range(1, 6):
         m.send(Frame(src=s, dst=0, size=51, kind="position"))

@@ -6,8 +6,14 @@ from __future__ import annotations
 import pytest
 
 from multiarm.errors import UsageError
-from workcell.sim.kernel import Kernel, ProcessGenerator
-from workcell.sim.supersigma import (
+from workcell.sim.comms.devices import (
+    DetectorController,
+    ForceController,
+    GripperController,
+    MotorController,
+)
+from workcell.sim.comms.microbus import BYTE_TIME, COMMAND_TIME, MOVE
+from workcell.sim.control.supersigma import (
     ABORT_FORCE,
     ABORT_RAIL,
     BUSY,
@@ -15,16 +21,12 @@ from workcell.sim.supersigma import (
     FREE,
     PAPER_TABLE,
     Command,
-    DetectorController,
-    ForceController,
-    GripperController,
     Microbus,
-    MotorController,
     bus_load_table,
     status_lines_needed,
     steps_args,
 )
-from workcell.sim.supersigma.microbus import BYTE_TIME, COMMAND_TIME, MOVE
+from workcell.sim.events.loop import EventLoop, ProcessGenerator
 
 
 def irq(bus: Microbus) -> bool:
@@ -37,7 +39,7 @@ def test_status_codes_are_the_papers() -> None:
 
 
 def test_interrupt_is_the_or_of_every_a_line() -> None:
-    k = Kernel()
+    k = EventLoop()
     bus = Microbus(k)
     bus.add(MotorController(1, "a", rail=(-10, 10)))
     bus.add(MotorController(2, "b", rail=(-10, 10)))
@@ -64,7 +66,7 @@ def test_interrupt_is_the_or_of_every_a_line() -> None:
 
 
 def test_an_aborted_controller_is_free_and_listens() -> None:
-    k = Kernel()
+    k = EventLoop()
     bus = Microbus(k)
     m = bus.add(MotorController(1, "x", rail=(-100, 100)))
     assert isinstance(m, MotorController)
@@ -78,7 +80,7 @@ def test_an_aborted_controller_is_free_and_listens() -> None:
 
 
 def test_a_busy_controller_misses_the_command_others_hear_theirs() -> None:
-    k = Kernel()
+    k = EventLoop()
     bus = Microbus(k)
     x = bus.add(MotorController(1, "x"))
     y = bus.add(MotorController(2, "y"))
@@ -92,7 +94,7 @@ def test_a_busy_controller_misses_the_command_others_hear_theirs() -> None:
 
 
 def test_answers_only_on_request_with_known_lengths() -> None:
-    k = Kernel()
+    k = EventLoop()
     bus = Microbus(k)
     bus.add(MotorController(1, "x"))
     bus.add(ForceController(2, "f", force=lambda t: (1.0, -2.0, 3.0)))
@@ -126,7 +128,7 @@ def test_answers_only_on_request_with_known_lengths() -> None:
 
 
 def test_reflex_arc_stops_first_and_tells_the_ccu_after() -> None:
-    k = Kernel()
+    k = EventLoop()
     bus = Microbus(k)
     z = bus.add(MotorController(1, "z"))
     assert isinstance(z, MotorController)
@@ -146,7 +148,7 @@ def test_reflex_arc_stops_first_and_tells_the_ccu_after() -> None:
 
 
 def test_ccu_never_exceeds_10000_commands_per_second() -> None:
-    k = Kernel()
+    k = EventLoop()
     bus = Microbus(k)
     for a in range(10):
         bus.add(GripperController(a, f"g{a}", stroke_time=0.0), segment=a // 5)

@@ -35,7 +35,7 @@ from workcell.sim import (
     SimOptions,
     simulate,
 )
-from workcell.sim.coordinator import CAUSE_KINDS
+from workcell.sim.coordination.centralized import CAUSE_KINDS
 
 UNEXPLAINED = "not completed when the simulation ended"
 
@@ -221,6 +221,36 @@ def test_a_part_late_from_time_zero_holds_back_its_task(
     tf = r.tasks_frame().set_index("task")
     assert _failed(r) == {}
     assert (tf.loc[gated, "start"] >= 5.0 - 1e-9).all(), tf.loc[gated, "start"]
+
+
+@pytest.mark.parametrize("resolve", [True, False])
+def test_parts_late_at_one_expected_arrival_all_hold_back_their_tasks(
+    scara4: Any, scara4_plan: Any, resolve: bool
+) -> None:
+    """Two parts found late at the same expected arrival (10 s), over
+    Ethernet: the first notice re-dispatches tasks; none may go out with its
+    start permitted while the second notice of that instant still holds it
+    back (``multiarm campaign scara4 --replay 0:69`` found a task started
+    before its part: the withdrawal came after the start)."""
+    ts = scara4.cell.taskset
+    arrivals = ts.expected_arrivals()
+    first, second = "seal2", "housing1"
+    assert arrivals[first] == arrivals[second] == 10.0
+    faults = [LatePart(first, 117.9), LatePart(second, 104.8)]
+    r = simulate(
+        scara4,
+        scara4_plan,
+        seed=1756357820,
+        faults=faults,
+        medium="ethernet",
+        options=SimOptions(resolve=resolve, strict=True),
+    )
+    tf = r.tasks_frame().set_index("task")
+    assert _failed(r) == {}
+    for f in faults:
+        gated = [t.id for t in ts.tasks if f.part in ts.gating_parts(t.id)]
+        assert gated
+        assert (tf.loc[gated, "start"] >= 10.0 + f.delay - 1e-9).all(), tf.loc[gated, "start"]
 
 
 # ------------------------------------------------- liveness, explained failures

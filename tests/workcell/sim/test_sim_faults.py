@@ -130,77 +130,64 @@ def _lost_wrongly(r: Any, p: Any, failed_arm: int) -> list[str]:
     ]
 
 
-def test_a_failed_arm_is_passed_to_the_re_solve_as_failed(
-    scara4: Any, scara4_plan: Any, monkeypatch: pytest.MonkeyPatch
+def test_a_failed_arm_whose_tasks_others_can_do_loses_nothing(
+    scara4: Any, scara4_plan: Any
 ) -> None:
-    """Every task has a working arm: the failed arm goes to the re-solve as
-    failed (it gets no task; it used to be an arm busy until far in the
-    future, which let the search put tasks after that), and nothing fails."""
-    import workcell.sim.coordinator as coordinator
-
-    states: list[Any] = []
-    real = coordinator.reschedule
-
-    def spy(*args: Any, **kw: Any) -> Any:
-        states.append(args[1])
-        return real(*args, **kw)
-
-    monkeypatch.setattr(coordinator, "reschedule", spy)
+    """Every task has a working arm: after the failure the re-solve
+    reassigns the failed arm's tasks (the arm goes to the scheduler as out
+    of service, ``tests/workcell/sim/test_reschedule.py``) and nothing fails."""
     p = scara4.problem
     r = simulate(scara4, scara4_plan, faults=[ArmFailure("sw", 0.3 * scara4_plan.makespan)])
-    assert len(states) == 1
-    assert states[0].failed_arms == {p.arm_names.index("sw")} and not states[0].arm_busy_until
+    assert r.metrics.resolves == 1
     assert r.metrics.failed_tasks == 0
+    late = r.tasks_frame()
+    after = late[late["start"] > 0.3 * scara4_plan.makespan]
+    assert len(after) and (after["arm"] != "sw").all()
+    assert r.metrics.done_tasks == p.n_tasks
 
 
-def test_a_re_solve_never_drops_a_task_a_working_arm_can_do(
-    cell: Any, plan: Any, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_a_re_solve_never_drops_a_task_a_working_arm_can_do(cell: Any, plan: Any) -> None:
     """Some tasks only the failed arm can do (they fail, with their
-    successors); the others must all run. They are planned far later, each
-    at its own time, and a re-solve that still puts a task a working arm can
-    do after them (the search did, trading it for the lost tasks' makespan;
-    forced here) is replaced by the warm start decoded."""
-    import dataclasses
-
-    import workcell.sim.coordinator as coordinator
-
+    successors, each with its cause); every other task runs."""
     p = cell.problem
     left = p.arm_names.index("left")
-    real = coordinator.reschedule
-    calls: list[tuple[Any, int]] = []
-
-    def spoil(*args: Any, **kw: Any) -> Any:
-        res = real(*args, **kw)
-        calls.append((args[1], kw["max_evaluations"]))
-        if len(calls) > 1:
-            return res
-        s = res.schedule
-        live = [
-            t for t in range(p.n_tasks) if s.start[t] < coordinator.FAR and t not in args[1].done
-        ]
-        t = max(live, key=lambda t: float(s.start[t]))
-        start, end = s.start.copy(), s.end.copy()
-        end[t] += 2 * coordinator.FAR - start[t]
-        start[t] = 2 * coordinator.FAR
-        bad = type(s)(s.mode, start, end, s.waits, s.blocking)
-        return dataclasses.replace(res, schedule=bad)
-
-    monkeypatch.setattr(coordinator, "reschedule", spoil)
     r = simulate(
         cell,
         plan,
         faults=[ArmFailure("left", 0.2 * plan.makespan)],
         options=SimOptions(monitor=False),
     )
-    assert len(calls) == 2 and calls[1][1] == 1  # the warm start decoded
-    state = calls[0][0]
-    far = sorted(v for v in state.releases.values() if v >= coordinator.FAR)
-    assert far and len(set(far)) == len(far)  # one time each for the tasks that cannot run
-    assert r.metrics.failed_tasks == len(far) > 0
+    assert r.metrics.failed_tasks > 0
     assert _lost_wrongly(r, p, left) == []
     causes = set(r.tasks_frame()["cause"]) - {""}
     assert all("every" in c and "failed" in c for c in causes), causes
+
+
+def test_tasks_frame_takes_each_row_from_one_plan(cell: Any, plan: Any) -> None:
+    """After re-solves, every row's planned times and arm come from the plan
+    named in its ``plan`` column (no sentinel time: dropped tasks keep the
+    times of the last plan that planned them to run); a task interrupted by
+    its arm's failure keeps its start."""
+    p = cell.problem
+    at = 0.2 * plan.makespan
+    r = simulate(cell, plan, faults=[ArmFailure("left", at)], options=SimOptions(monitor=False))
+    tf = r.tasks_frame()
+    assert r.metrics.resolves == 1 and set(tf["plan"]) <= {0, 1} and (tf["plan"] == 1).any()
+    last = r.plan.schedule
+    for row in tf[tf["plan"] == 1].itertuples():
+        t = p.task_names.index(row.task)
+        assert (row.planned_start, row.planned_end) == (float(last.start[t]), float(last.end[t]))
+        if row.status == "failed":
+            assert row.arm == p.arm_names[int(last.arms(p)[t])]
+    for row in tf[tf["plan"] == 0].itertuples():
+        t = p.task_names.index(row.task)
+        assert (row.planned_start, row.planned_end) == (float(plan.start[t]), float(plan.end[t]))
+    assert (tf["planned_end"] < 10 * plan.makespan).all()
+    interrupted = [e.task for e in r.trace if e.kind == "task_failed" and "interrupted" in e.detail]
+    failed = tf.set_index("task")
+    for task in interrupted:
+        if failed.loc[task, "status"] == "failed":
+            assert failed.loc[task, "start"] <= at
 
 
 def test_crash_is_a_reflex_stop_told_afterwards(cell: Any, plan: Any) -> None:

@@ -33,9 +33,9 @@ from workcell.sim import (
     SimResult,
     simulate,
 )
-from workcell.sim.controller import INTERNAL_MESSAGES, pipeline_offset
-from workcell.sim.run import check_control_bound
-from workcell.sim.trace import COLUMNS, Trace
+from workcell.sim.control.controller import INTERNAL_MESSAGES, pipeline_offset
+from workcell.sim.events.trace import COLUMNS, Trace
+from workcell.sim.harness.simulate import check_control_bound
 
 GOLDEN = Path(__file__).parent / "golden" / "supersigma_trace.json"
 
@@ -187,7 +187,8 @@ def test_oscillating_geometric_stops_cannot_spin_without_time_advancing(
     the re-checks at one instant are bounded, later ones wait a guard period,
     and after a bounded number of those the stopped arms stay stopped: the
     run ends, its tasks failed with the cause (work limit: guard calls)."""
-    from workcell.sim.coordinator import Coordinator, GeometryGuard
+    from workcell.sim.coordination.centralized import Coordinator
+    from workcell.sim.coordination.guard import GeometryGuard
 
     calls = [0]
 
@@ -199,7 +200,7 @@ def test_oscillating_geometric_stops_cannot_spin_without_time_advancing(
         return [others[calls[0] % len(others)]]
 
     monkeypatch.setattr(GeometryGuard, "blockers", blockers)
-    monkeypatch.setattr(Coordinator, "_detour", lambda self, ctl: False)
+    monkeypatch.setattr(Coordinator, "try_detour", lambda self, ctl: False)
     r = simulate(scara4, plans["scara4"]["greedy"], options=SimOptions(monitor=False))
     assert calls[0] < 20_000
     assert r.metrics.done_tasks == 0
@@ -214,7 +215,8 @@ def test_utilisation_is_busy_time_over_the_executed_makespan(
     while the run goes on (an emergency stop late in the plan): the arms
     stand on their legs long after the last completed task, and that time
     is not counted. Utilisation stays busy time / executed makespan, in [0, 1]."""
-    from workcell.sim.coordinator import Coordinator, GeometryGuard
+    from workcell.sim.coordination.centralized import Coordinator
+    from workcell.sim.coordination.guard import GeometryGuard
 
     plan = plans["supersigma"]["greedy"]
     p = supersigma.problem
@@ -229,7 +231,7 @@ def test_utilisation_is_busy_time_over_the_executed_makespan(
         return [o.index for o in arms if o is not mover][:1]
 
     monkeypatch.setattr(GeometryGuard, "blockers", blockers)
-    monkeypatch.setattr(Coordinator, "_detour", lambda self, ctl: False)
+    monkeypatch.setattr(Coordinator, "try_detour", lambda self, ctl: False)
     late = 0.9 * plan.makespan
     r = simulate(
         supersigma, plan, faults=[EmergencyStop(late, 1.0)], options=SimOptions(monitor=False)
@@ -254,7 +256,7 @@ def test_a_blocked_arm_continues_with_an_alternative_trajectory(
     first task; the coordinator plans an OMPL detour around that arm to the
     next station, the mover takes it and goes on with its task from there;
     the detour costs more than the plan charged, so the plan is re-solved."""
-    from workcell.sim.coordinator import GeometryGuard
+    from workcell.sim.coordination.guard import GeometryGuard
 
     p = supersigma.problem
     plan = plans["supersigma"]["greedy"]
@@ -457,8 +459,10 @@ def test_result_tables_and_files(supersigma: Any, plans: Any, tmp_path: Path) ->
         "status",
         "cause",
         "cause_kind",
+        "plan",
     ]
     assert (tf["status"] == "done").all() and (tf["cause_kind"] == "").all()
+    assert (tf["plan"] == 0).all()  # no re-solve: every row from the schedule given
     rf = r.reservations_frame()
     assert set(rf["kind"]) <= {"zone", "move", "tool"} and len(rf) > 0
     assert (rf["end"] >= rf["start"]).all()

@@ -5,8 +5,13 @@ from __future__ import annotations
 import pytest
 
 from multiarm.errors import UsageError, ValidationError
-from workcell.sim.kernel import Kernel, ProcessGenerator
-from workcell.sim.supersigma import (
+from workcell.sim.comms.devices import (
+    ForceController,
+    GripperController,
+    MotorController,
+)
+from workcell.sim.comms.microbus import ACTUATE, COMMAND_TIME, MOVE
+from workcell.sim.control.supersigma import (
     ABORT_FORCE,
     ABORT_RAIL,
     BUSY,
@@ -14,10 +19,7 @@ from workcell.sim.supersigma import (
     FREE,
     Command,
     Controller,
-    ForceController,
-    GripperController,
     Microbus,
-    MotorController,
     Piece,
     StepProfile,
     bus_load_table,
@@ -26,11 +28,11 @@ from workcell.sim.supersigma import (
     status_lines_needed,
     steps_args,
 )
-from workcell.sim.supersigma.microbus import ACTUATE, COMMAND_TIME, MOVE
+from workcell.sim.events.loop import EventLoop, ProcessGenerator
 
 
-def _bus(n: int = 2) -> tuple[Kernel, Microbus, list[MotorController]]:
-    k = Kernel()
+def _bus(n: int = 2) -> tuple[EventLoop, Microbus, list[MotorController]]:
+    k = EventLoop()
     bus = Microbus(k)
     motors = [MotorController(i + 1, f"m{i}") for i in range(n)]
     for m in motors:
@@ -97,7 +99,7 @@ def test_answers_only_on_request_and_the_bus_waits_for_them() -> None:
 
 
 def test_status_codes_and_or_ed_interrupt() -> None:
-    k = Kernel()
+    k = EventLoop()
     bus = Microbus(k)
     rail = bus.add(MotorController(1, "x", rail=(-100, 100)))
     z = bus.add(MotorController(2, "z"))
@@ -129,7 +131,7 @@ def test_status_codes_and_or_ed_interrupt() -> None:
 
 
 def test_segments_and_line_count() -> None:
-    k = Kernel()
+    k = EventLoop()
     bus = Microbus(k)
     for a in range(11):
         bus.add(GripperController(a, f"g{a}"), segment=0)

@@ -1,72 +1,12 @@
-"""SUPERSIGMA: the central control unit, MICROBUS and device controllers (S1).
+"""Deprecated module path: use :mod:`workcell.sim.control.supersigma` (this shim stays for one release)."""
 
-* :mod:`.microbus` -- the bus rules (S1.3), status lines (S1.4), the stepper,
-  force, gripper and detector controllers (S1.5, S1.7, S1.8);
-* :mod:`.ccu` -- the CCU and its task-box language (S1.1, S1.9);
-* :mod:`.programs` -- a one/two-arm cell, the chess-piece demo (S1.8) and the
-  S1.10 bus-load programs;
-* :mod:`.schedule` -- a cell's schedule run as a task program on the CCU.
+import warnings
 
-Examples
---------
->>> status_lines_needed(80)
-(16, 16)
-"""
+from workcell.sim.control.supersigma import *  # noqa: F403
+from workcell.sim.control.supersigma import __all__ as __all__
 
-from workcell.sim.supersigma.ccu import CCU, Box, RunReport
-from workcell.sim.supersigma.microbus import (
-    ABORT_FORCE,
-    ABORT_RAIL,
-    BUSY,
-    FREE,
-    Command,
-    Controller,
-    DetectorController,
-    ForceController,
-    GripperController,
-    Microbus,
-    MotorController,
-    StepProfile,
-    move_time,
-    status_lines_needed,
-    steps_args,
+warnings.warn(
+    "workcell.sim.supersigma moved to workcell.sim.control.supersigma",
+    DeprecationWarning,
+    stacklevel=2,
 )
-from workcell.sim.supersigma.programs import (
-    PAPER_TABLE,
-    Piece,
-    SigmaCell,
-    bus_load_table,
-    chess_sort,
-    run_program,
-)
-from workcell.sim.supersigma.schedule import Handover, ScheduleRun, run_schedule
-
-__all__ = [
-    "ABORT_FORCE",
-    "ABORT_RAIL",
-    "BUSY",
-    "CCU",
-    "FREE",
-    "PAPER_TABLE",
-    "Box",
-    "Command",
-    "Controller",
-    "DetectorController",
-    "ForceController",
-    "GripperController",
-    "Handover",
-    "Microbus",
-    "MotorController",
-    "Piece",
-    "RunReport",
-    "ScheduleRun",
-    "SigmaCell",
-    "StepProfile",
-    "bus_load_table",
-    "chess_sort",
-    "move_time",
-    "run_program",
-    "run_schedule",
-    "status_lines_needed",
-    "steps_args",
-]

@@ -1,6 +1,6 @@
 """Fast batch contention simulator for Ethernet CSMA/CD rounds (numba).
 
-Same round model as :func:`workcell.sim.network.dcr.dcr_rounds`: each round
+Same round model as :func:`workcell.sim.comms.dcr.dcr_rounds`: each round
 starts at a common instant, station 0 has a trajectory frame, the others a
 51-byte position report, each present with probability ``load``; every
 pair of stations is taken tau (end-to-end) apart. Stations transmit when
@@ -149,7 +149,7 @@ def ethernet_rounds(
     load : float, optional
         Probability that a station has a frame in a round, (0, 1].
     bus_length, rate, ifs, jam_bits, epsilon, propagation_speed : optional
-        As in :func:`workcell.sim.network.dcr.dcr_bound`.
+        As in :func:`workcell.sim.comms.dcr.dcr_bound`.
     slot_time : float, optional
         Backoff slot, seconds.
     position_bytes : int, optional

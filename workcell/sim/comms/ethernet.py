@@ -23,7 +23,7 @@ A station *senses carrier* at its own position: it hears a transmission from
   between frames (the worst-case end-to-end propagation as guard). Frames
   that arrive during the epoch wait for its end. With at most one frame per
   station in a round, delay is bounded by
-  :func:`workcell.sim.network.dcr.dcr_bound` (checked by the tests over
+  :func:`workcell.sim.comms.dcr.dcr_bound` (checked by the tests over
   random positions, orders and arrival times).
 * **Transmit chain** (:class:`TransmitChain`): each station's LAN
   coprocessor holds a chain of frames, ordered by priority (default for
@@ -41,9 +41,9 @@ the second part of the IFS.
 
 Examples
 --------
->>> from workcell.sim.kernel import Kernel
->>> from workcell.sim.medium import Frame
->>> k = Kernel()
+>>> from workcell.sim.events.loop import EventLoop
+>>> from workcell.sim.comms.medium import Frame
+>>> k = EventLoop()
 >>> m = EthernetMedium(k, positions=[0.0, 50.0, 100.0], mode="csma_dcr")
 >>> got = []
 >>> for s in (1, 2):
@@ -69,8 +69,8 @@ import numpy as np
 
 from multiarm.errors import ValidationError
 from multiarm.types import FloatArray, Seed, as_rng
-from workcell.sim.kernel import Handle, Kernel
-from workcell.sim.medium import BaseMedium, Frame
+from workcell.sim.comms.medium import BaseMedium, Frame
+from workcell.sim.events.loop import EventLoop, Handle
 
 __all__ = ["EthernetMedium", "EthernetParams", "Mode", "TransmitChain"]
 
@@ -148,7 +148,7 @@ class TransmitChain:
 
     Examples
     --------
-    >>> from workcell.sim.medium import Frame
+    >>> from workcell.sim.comms.medium import Frame
     >>> c = TransmitChain(by_priority=True)
     >>> for prio, kind in ((5, "position"), (5, "position2"), (0, "alarm")):
     ...     c.push(Frame(src=0, dst=1, size=51, kind=kind, priority=prio))
@@ -226,7 +226,7 @@ class EthernetMedium(BaseMedium):
 
     Parameters
     ----------
-    kernel : Kernel
+    kernel : EventLoop
         The kernel.
     positions : sequence of float
         Position of each station along the bus, metres (station i at
@@ -258,7 +258,7 @@ class EthernetMedium(BaseMedium):
 
     def __init__(
         self,
-        kernel: Kernel,
+        kernel: EventLoop,
         positions: Sequence[float] | FloatArray,
         mode: Mode = "csma_cd",
         params: EthernetParams | None = None,

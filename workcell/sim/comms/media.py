@@ -1,7 +1,7 @@
 """Media by name: the one entry point the simulation uses to build a medium.
 
 ``make_medium(name, kernel, stations, **params)`` returns a
-:class:`workcell.sim.medium.Medium` with stations ``0..n-1``; station 0 is
+:class:`workcell.sim.comms.medium.Medium` with stations ``0..n-1``; station 0 is
 the coordinator, stations 1..N the arms in the cell's arm order. The names,
 in :data:`MEDIA`, and the parameters each accepts (every one optional):
 
@@ -35,9 +35,9 @@ value raises :class:`multiarm.errors.UsageError` naming the choices.
 
 Examples
 --------
->>> from workcell.sim.kernel import Kernel
->>> from workcell.sim.medium import Frame
->>> k = Kernel()
+>>> from workcell.sim.events.loop import EventLoop
+>>> from workcell.sim.comms.medium import Frame
+>>> k = EventLoop()
 >>> m = make_medium("csma-dcr", k, 10)
 >>> _ = m.send(Frame(src=1, dst=0, size=51, kind="position"))
 >>> k.run()
@@ -57,11 +57,11 @@ from typing import Any
 import numpy as np
 
 from multiarm.errors import UsageError, ValidationError
-from workcell.sim.kernel import Kernel
-from workcell.sim.medium import FixedLatencyMedium, IdealMedium, Medium
-from workcell.sim.network.ethernet import EthernetMedium, EthernetParams, Mode
-from workcell.sim.network.multibus import MultibusII
-from workcell.sim.network.serial import SerialBus, SerialStar
+from workcell.sim.comms.ethernet import EthernetMedium, EthernetParams, Mode
+from workcell.sim.comms.medium import FixedLatencyMedium, IdealMedium, Medium
+from workcell.sim.comms.multibus import MultibusII
+from workcell.sim.comms.serial import SerialBus, SerialStar
+from workcell.sim.events.loop import EventLoop
 
 __all__ = ["MEDIA", "MEDIUM_PARAMS", "make_medium"]
 
@@ -106,7 +106,7 @@ MEDIUM_PARAMS: dict[str, tuple[str, ...]] = {
 
 
 def _ethernet(
-    mode: Mode, kernel: Kernel, stations: int | Sequence[int], p: dict[str, Any]
+    mode: Mode, kernel: EventLoop, stations: int | Sequence[int], p: dict[str, Any]
 ) -> Medium:
     n = stations if isinstance(stations, int) else len(stations)
     if not isinstance(stations, int) and list(stations) != list(range(n)):
@@ -137,7 +137,7 @@ def _ethernet(
     )
 
 
-_BUILDERS: dict[str, Callable[[Kernel, int | Sequence[int], dict[str, Any]], Medium]] = {
+_BUILDERS: dict[str, Callable[[EventLoop, int | Sequence[int], dict[str, Any]], Medium]] = {
     "ideal": lambda k, s, p: IdealMedium(k, s),
     "fixed": lambda k, s, p: FixedLatencyMedium(k, s, float(p.get("latency", 1e-3))),
     "csma-dcr": lambda k, s, p: _ethernet("csma_dcr", k, s, p),
@@ -177,14 +177,16 @@ def normalise_name(name: object) -> str:
     return key
 
 
-def make_medium(name: str, kernel: Kernel, stations: int | Sequence[int], **params: Any) -> Medium:
+def make_medium(
+    name: str, kernel: EventLoop, stations: int | Sequence[int], **params: Any
+) -> Medium:
     """Build the medium called ``name`` (see the module docstring).
 
     Parameters
     ----------
     name : str
         One of :data:`MEDIA`.
-    kernel : Kernel
+    kernel : EventLoop
         The simulation kernel.
     stations : int or sequence of int
         Number of stations, or the list ``0..n-1``; station 0 is the
@@ -205,11 +207,11 @@ def make_medium(name: str, kernel: Kernel, stations: int | Sequence[int], **para
 
     Examples
     --------
-    >>> from workcell.sim.kernel import Kernel
-    >>> m = make_medium("fixed", Kernel(), 3, latency=2e-3)
+    >>> from workcell.sim.events.loop import EventLoop
+    >>> m = make_medium("fixed", EventLoop(), 3, latency=2e-3)
     >>> m.latency, m.n_stations
     (0.002, 3)
-    >>> make_medium("serial-bus", Kernel(), 3, baud=9600)
+    >>> make_medium("serial-bus", EventLoop(), 3, baud=9600)
     Traceback (most recent call last):
     ...
     multiarm.errors.UsageError: medium 'serial-bus': unknown parameter 'baud'; accepted: rate, header_bytes, seed

@@ -60,7 +60,7 @@ KINDS: tuple[str, ...] = (
 )
 """Every kind of trace record (``"force"``: the wrist force sensor's
 thresholds set and forces read during an insertion search, S1.7, with
-``SimOptions(insertion="drawn")``; :mod:`workcell.sim.force`;
+``SimOptions(insertion="drawn")``; :mod:`workcell.sim.control.force`;
 ``"drop"``: a frame dropped at its receiver, a duplicate or older than the
 withdrawal of its task, by the links' sequence numbers)."""
 
@@ -257,7 +257,7 @@ class Metrics:
     ticks : int
         Controller ticks modelled (0 at event level).
     events : int
-        Kernel events run.
+        EventLoop events run.
     wall_seconds : float
         Wall-clock time of the run.
     """

@@ -79,7 +79,7 @@ REDUCED: dict[str, Any] = {"rate": 20e6, "ifs": 3.2e-6, "slot_time": 3.2e-6}
 """The paper's non-standard parameters (S2.9): 20 Mb/s, IFS 3.2 us and a
 slot of 3.2 us (64 bit times at 20 Mb/s), just above jam + 2 tau = 2.6 us on
 the 100 m bus. Accepted by :func:`dcr_bound`, :func:`dcr_rounds` and
-:class:`~workcell.sim.network.ethernet.EthernetParams`."""
+:class:`~workcell.sim.comms.ethernet.EthernetParams`."""
 
 
 def _check_positive(**values: float) -> None:

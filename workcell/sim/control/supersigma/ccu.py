@@ -32,9 +32,10 @@ the box goes on (the program can look at :attr:`CCU.aborts`).
 
 Examples
 --------
->>> from workcell.sim.kernel import Kernel
->>> from workcell.sim.supersigma.microbus import Microbus, MotorController
->>> k = Kernel()
+>>> from workcell.sim.events.loop import EventLoop
+>>> from workcell.sim.comms.devices import MotorController
+>>> from workcell.sim.comms.microbus import Microbus
+>>> k = EventLoop()
 >>> bus = Microbus(k)
 >>> _ = bus.add(MotorController(1, "x"))
 >>> ccu = CCU(k, bus)
@@ -55,8 +56,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from multiarm.errors import ValidationError
-from workcell.sim.kernel import Kernel, ProcessGenerator
-from workcell.sim.supersigma.microbus import (
+from workcell.sim.comms.microbus import (
     ACTUATE,
     MOVE,
     SET_THRESHOLD,
@@ -65,6 +65,7 @@ from workcell.sim.supersigma.microbus import (
     Microbus,
     steps_args,
 )
+from workcell.sim.events.loop import EventLoop, ProcessGenerator
 
 __all__ = ["CCU", "Box", "RunReport"]
 
@@ -120,7 +121,7 @@ class CCU:
 
     Parameters
     ----------
-    kernel : Kernel
+    kernel : EventLoop
         The kernel.
     bus : Microbus
         The bus.
@@ -141,7 +142,7 @@ class CCU:
 
     def __init__(
         self,
-        kernel: Kernel,
+        kernel: EventLoop,
         bus: Microbus,
         statement_time: float = 1e-3,
         poll_interval: float = 1e-3,

@@ -24,9 +24,9 @@ Examples
 --------
 >>> unsolicited_count(51)
 3
->>> from workcell.sim.kernel import Kernel
->>> from workcell.sim.medium import Frame
->>> k = Kernel()
+>>> from workcell.sim.events.loop import EventLoop
+>>> from workcell.sim.comms.medium import Frame
+>>> k = EventLoop()
 >>> m = MultibusII(k, 3)
 >>> _ = m.send(Frame(src=1, dst=0, size=51, kind="position"))
 >>> k.run()
@@ -40,8 +40,8 @@ import math
 from collections.abc import Collection, Sequence
 
 from multiarm.errors import ValidationError
-from workcell.sim.kernel import Kernel
-from workcell.sim.medium import BROADCAST, BaseMedium, Frame
+from workcell.sim.comms.medium import BROADCAST, BaseMedium, Frame
+from workcell.sim.events.loop import EventLoop
 
 __all__ = ["MultibusII", "unsolicited_count"]
 
@@ -84,7 +84,7 @@ class MultibusII(BaseMedium):
 
     Parameters
     ----------
-    kernel : Kernel
+    kernel : EventLoop
         The kernel.
     stations : int or sequence of int
         Agents on the bus.
@@ -113,7 +113,7 @@ class MultibusII(BaseMedium):
 
     def __init__(
         self,
-        kernel: Kernel,
+        kernel: EventLoop,
         stations: int | Sequence[int],
         bandwidth: float = 40e6,
         unsolicited_payload: int = 20,

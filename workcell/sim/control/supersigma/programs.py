@@ -48,16 +48,18 @@ import numpy as np
 
 from multiarm.errors import ValidationError
 from multiarm.types import Seed, as_rng
-from workcell.sim.kernel import Kernel, ProcessGenerator
-from workcell.sim.supersigma.ccu import CCU, Box, RunReport
-from workcell.sim.supersigma.microbus import (
+from workcell.sim.comms.devices import (
     DetectorController,
     ForceController,
     GripperController,
-    Microbus,
     MotorController,
+)
+from workcell.sim.comms.microbus import (
+    Microbus,
     StepProfile,
 )
+from workcell.sim.control.supersigma.ccu import CCU, Box, RunReport
+from workcell.sim.events.loop import EventLoop, ProcessGenerator
 
 __all__ = ["PAPER_TABLE", "Piece", "SigmaCell", "bus_load_table", "chess_sort", "run_program"]
 
@@ -109,7 +111,7 @@ class SigmaCell:
 
     Attributes
     ----------
-    kernel : Kernel
+    kernel : EventLoop
     bus : Microbus
     ccu : CCU
     """
@@ -124,7 +126,7 @@ class SigmaCell:
     ) -> None:
         if not 1 <= arms <= 25:
             raise ValidationError(f"SigmaCell: arms must be 1..25, got {arms}")
-        self.kernel = Kernel()
+        self.kernel = EventLoop()
         self.bus = Microbus(self.kernel)
         self.profile = profile if profile is not None else StepProfile()
         self.z_home = z_home

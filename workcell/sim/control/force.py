@@ -4,8 +4,8 @@ Each arm carries a wrist force sensor (:class:`ForceSensor`): three force
 components (x, y, z in the wrist frame) sampled continuously by their own
 controller, and one threshold per component. The arm controller has the two
 S1.7 commands as operations: "tell me the force on axis k"
-(:meth:`~workcell.sim.controller.ArmController.read_force`) and "set the
-thresholds" (:meth:`~workcell.sim.controller.ArmController.set_thresholds`).
+(:meth:`~workcell.sim.control.controller.ArmController.read_force`) and "set the
+thresholds" (:meth:`~workcell.sim.control.controller.ArmController.set_thresholds`).
 
 * **Free motion.** The thresholds are low (:data:`FREE_THRESHOLD`, 5 N by
   default; ``SimOptions(force_threshold=...)`` sets them for the whole
@@ -68,7 +68,6 @@ from multiarm.types import FloatArray
 from tasklib.steps import ForceSearch, Insert
 from workcell.compile import CompiledCell
 from workcell.program import expand_task
-from workcell.sim import faults as _faults
 
 __all__ = [
     "CRASH_AXIS",
@@ -89,8 +88,8 @@ FREE_THRESHOLD = 5.0
 """Newtons: the default free-motion threshold of every force component (S1.7:
 during free moves only inertial forces act, so a few newtons detect a crash)."""
 
-CRASH_FORCE = _faults.CRASH_FORCE
-"""Newtons (50): the default force of a :class:`~workcell.sim.faults.Crash`,
+CRASH_FORCE = 50.0
+"""Newtons (50): the default force of a :class:`~workcell.sim.harness.faults.Crash`,
 above the free threshold and above the raised thresholds of the built-in
 insert steps (25 N), so a crash record without a force stops the arm as it
 always did."""

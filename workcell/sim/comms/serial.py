@@ -20,9 +20,9 @@ transmission.
 
 Examples
 --------
->>> from workcell.sim.kernel import Kernel
->>> from workcell.sim.medium import Frame
->>> k = Kernel()
+>>> from workcell.sim.events.loop import EventLoop
+>>> from workcell.sim.comms.medium import Frame
+>>> k = EventLoop()
 >>> m = SerialStar(k, stations=3, rate=9600.0, header_bytes=0)
 >>> f = m.send(Frame(src=1, dst=0, size=51, kind="position"))
 >>> k.run()
@@ -36,8 +36,8 @@ import math
 from collections.abc import Sequence
 
 from multiarm.errors import ValidationError
-from workcell.sim.kernel import Kernel
-from workcell.sim.medium import BROADCAST, BaseMedium, Frame
+from workcell.sim.comms.medium import BROADCAST, BaseMedium, Frame
+from workcell.sim.events.loop import EventLoop
 
 __all__ = ["SerialBus", "SerialStar", "line_time"]
 
@@ -91,7 +91,7 @@ class SerialStar(BaseMedium):
 
     Parameters
     ----------
-    kernel : Kernel
+    kernel : EventLoop
         The kernel.
     stations : int or sequence of int
         Stations (the hub included).
@@ -110,7 +110,7 @@ class SerialStar(BaseMedium):
 
     def __init__(
         self,
-        kernel: Kernel,
+        kernel: EventLoop,
         stations: int | Sequence[int],
         rate: float = 9600.0,
         header_bytes: int = 4,
@@ -159,7 +159,7 @@ class SerialBus(BaseMedium):
 
     Parameters
     ----------
-    kernel : Kernel
+    kernel : EventLoop
         The kernel.
     stations : int or sequence of int
         Stations.
@@ -175,9 +175,9 @@ class SerialBus(BaseMedium):
 
     Examples
     --------
-    >>> from workcell.sim.kernel import Kernel
-    >>> from workcell.sim.medium import Frame, BROADCAST
-    >>> k = Kernel()
+    >>> from workcell.sim.events.loop import EventLoop
+    >>> from workcell.sim.comms.medium import Frame, BROADCAST
+    >>> k = EventLoop()
     >>> m = SerialBus(k, 3, rate=10_000.0, header_bytes=0)
     >>> for s in (1, 2):
     ...     _ = m.send(Frame(src=s, dst=0, size=50))
@@ -188,7 +188,7 @@ class SerialBus(BaseMedium):
 
     def __init__(
         self,
-        kernel: Kernel,
+        kernel: EventLoop,
         stations: int | Sequence[int],
         rate: float = 9600.0,
         header_bytes: int = 4,

@@ -1,0 +1,203 @@
+"""The centralized coordinator's geometric conflicts (S2.6, S2.12): the check
+before every departure, alternative trajectories, back-offs and promotions.
+
+Functions here are methods of :class:`~workcell.sim.coordination.centralized.Coordinator`
+(bound in its class body), kept apart to keep each module small.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from workcell.geometry import ObstacleSet, plan_detour
+from workcell.sim.protocol.ports import ArmPort
+
+_Self = Any
+"""The :class:`~workcell.sim.coordination.centralized.Coordinator` these functions are methods of (bound in its
+class body; typed loosely here: workcell.sim.coordination.centralized imports this module, never the reverse)."""
+
+__all__: list[str] = []
+
+
+def check_departure(self: _Self, ctl: ArmPort) -> bool:
+    assert self.guard is not None
+    blockers = self.guard.blockers(ctl, self.arms)
+    a = ctl.index
+    if not blockers:
+        if a in self.geo_held:
+            del self.geo_held[a]
+            self.trace.add(
+                self.kernel.now, "wake", arm=ctl.name, detail="geometric conflict over: go on"
+            )
+        return True
+    if self.geo_held.get(a) != blockers:
+        names = ", ".join(repr(self.p.arm_names[b]) for b in blockers)
+        self.trace.add(
+            self.kernel.now,
+            "sleep",
+            arm=ctl.name,
+            task=self.p.task_names[ctl.leg.task] if ctl.leg is not None else "",
+            detail=f"geometric conflict (S2.12): arm {names} in the way: stop",
+        )
+        self.geo_held[a] = blockers
+        self.arm_moved()
+    return False
+
+
+def try_detour(self: _Self, ctl: ArmPort) -> bool:
+    """S2.12 "continue with alternative trajectory": an OMPL path to the
+    next station around the arms standing in the way (tried once per
+    station; work-limited, so the same seed plans the same path)."""
+    leg = ctl.leg
+    blockers = self.geo_held.get(ctl.index, [])
+    if (
+        leg is None
+        or leg.kind != "task"
+        or ctl.away is not None
+        or not blockers
+        or any(self.arms[b].running for b in blockers)
+    ):
+        return False
+    key = (ctl.index, id(leg), ctl.k)
+    if key in self.detour_tried:
+        return False
+    self.detour_tried.add(key)
+    arm = ctl.arm
+    qa = ctl.position()
+    qb = leg.trajectory.sample(np.array([leg.stations[ctl.k].tau]))[0]
+    items: list[Any] = []
+    for b in blockers:
+        other = self.arms[b]
+        items.extend(ObstacleSet.from_arm(other.arm, other.position()).items)
+    res = plan_detour(
+        arm,
+        qa,
+        qb,
+        ObstacleSet(items, name="standing arms"),
+        budget=60.0,
+        seed=self.seed,
+        resolution=0.01,
+        clearance=0.02,
+        max_checks=self.detour_checks,
+    )
+    if not res.solved:  # "direct" (the straight joint move is free) or "solved"
+        return False
+    traj = arm.time_path(res.path, "sync")
+    extra = traj.duration - (leg.stations[ctl.k].tau - ctl.tau)
+    self.detours += 1
+    self.trace.add(
+        self.kernel.now,
+        "detour",
+        arm=ctl.name,
+        task=self.p.task_names[leg.task],
+        delay=extra,
+        detail=f"alternative trajectory around arm(s) "
+        f"{', '.join(repr(self.p.arm_names[b]) for b in blockers)} (S2.12): "
+        f"{extra:+.6g} s",
+    )
+    ctl.take_detour(traj, leg.task)
+    if extra > float(self.plan.blocking[leg.task]) + 1e-9:
+        self.resolve(f"detour of task {self.p.task_names[leg.task]!r} costs more than planned")
+    return True
+
+
+def check_way(self: _Self, ctl: ArmPort) -> bool:
+    assert self.guard is not None
+    return not self.guard.blockers(ctl, self.arms)
+
+
+def arm_moved(self: _Self) -> None:
+    """Look at the geometric stops again (after something moved or stopped).
+
+    Progress is guaranteed: at most ``recheck_limit`` passes run at one
+    instant; after that the next pass comes one guard period later (the
+    kernel's time advances), and after ``max_stalled`` such deferred
+    passes with no task starting or ending the arms still stopped stay
+    stopped (an unresolved geometric deadlock, reported per task)."""
+    if self._recheck_h is not None:
+        return
+    now = self.kernel.now
+    if now != self._recheck_at:
+        self._recheck_at, self._recheck_n = now, 0
+    self._recheck_n += 1
+    delay = 0.0
+    if self._recheck_n > self.recheck_limit:
+        if self.stalled >= self.max_stalled:
+            return
+        self.stalled += 1
+        delay = self.guard.dt if self.guard is not None else 0.01
+    self._recheck_h = self.kernel.schedule(delay, self._recheck, priority=1)
+
+
+def _recheck(self: _Self) -> None:
+    self._recheck_h = None
+    for ctl in self.arms:
+        if ctl.failed:
+            continue
+        if ctl.away is not None and ctl.leg is None and ctl.away_until is not None:
+            ai, leg_a, k_a = ctl.away_until
+            mover = self.arms[ai]
+            # back once the mover has finished that task (its leg is over
+            # and it is not on an excursion from it), or waits for a grant
+            passed = mover.leg is not leg_a and mover.away is None
+            waits = mover.stuck() and not mover.held_by_geometry()
+            del k_a
+            if mover.failed or passed or waits:
+                ctl.come_back()
+        if not ctl.held_by_geometry():
+            continue
+        ctl.release_geometry_hold()
+        if ctl.held_by_geometry() and self.try_detour(ctl):
+            continue
+        if ctl.held_by_geometry():
+            blockers = self.geo_held.get(ctl.index, [])
+            if (
+                blockers
+                and self.backoffs < self.max_backoffs
+                and all(self.arms[b].stuck() and self.arms[b].away is None for b in blockers)
+            ):
+                moved = False
+                for b in blockers:
+                    if self.arms[b].back_off((ctl.index, ctl.leg, ctl.k)):
+                        moved = True
+                        self.backoffs += 1
+                        self.detours += 1
+                        self.trace.add(
+                            self.kernel.now,
+                            "detour",
+                            arm=self.p.arm_names[b],
+                            detail=f"geometric deadlock (S2.6): backs off to its home joints "
+                            f"out of arm {ctl.name!r}'s way",
+                        )
+                if not moved:
+                    self._promote(ctl.index, blockers)
+
+
+def _promote(self: _Self, a: int, blockers: list[int]) -> None:
+    """Last resort of a geometric deadlock: an arm standing in ``a``'s way
+    waits for a resource the plan gives ``a`` first, and cannot back off;
+    let it go first (``a`` has not taken that resource yet)."""
+    for b in blockers:
+        if not self.pending[b] or self.zm_wait[b] is not None:
+            continue
+        piece = self.pending[b][0]
+        order = self.orders.get((piece[0], piece[1]), [])
+        if piece not in order:
+            continue
+        i = order.index(piece)
+        ahead = [q for q in order[:i] if q not in self.released]
+        if not ahead or any(q in self.held for q in ahead):
+            continue
+        order.remove(piece)
+        order.insert(order.index(ahead[0]), piece)
+        self.trace.add(
+            self.kernel.now,
+            "grant",
+            arm=self.p.arm_names[b],
+            task=self.p.task_names[piece[2]] if piece[2] >= 0 else "",
+            zone=self._zone_name(piece),
+            detail=f"geometric deadlock (S2.6): goes before arm {self.p.arm_names[a]!r}",
+        )
+        self._serve(b)

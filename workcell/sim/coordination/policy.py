@@ -1,0 +1,145 @@
+"""Coordination policies: the protocol every policy implements, and the registry.
+
+:func:`~workcell.simulate` takes ``coordination=<name>`` and builds the policy
+registered under that name (:data:`POLICIES`). Today one is registered:
+``"centralized"``, the S2.7 coordinator
+(:class:`~workcell.sim.coordination.centralized.Coordinator`). A policy is
+constructed with the compiled cell, the plan, the event loop, the link, the
+trace and the arms' ports (:class:`~workcell.sim.protocol.ports.ArmPort`);
+it talks to the arms through the link (station 0 receives, the arms are
+stations ``1..n``) and answers the harness through :class:`CoordinationPolicy`.
+
+A distributed policy (S2.7's last sentence, S2.4: more traffic) plugs in
+here: it would register a factory that builds one peer per arm on the same
+link (each a participant with its own state machine: per-zone mutual
+exclusion by request/reply in plan order, activations and emergency stops
+broadcast, an elected peer that re-solves through
+:func:`scheduler.reschedule`), and expose the same read-only results
+(task states and causes, the plan followed, the arms out).
+
+Examples
+--------
+>>> sorted(POLICIES)
+['centralized']
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
+
+from multiarm.errors import UsageError
+from scheduler import Problem, Schedule
+from workcell.compile import CompiledCell
+from workcell.sim.comms.link import Link
+from workcell.sim.coordination.centralized import Coordinator
+from workcell.sim.events.loop import EventLoop
+from workcell.sim.events.trace import Trace
+from workcell.sim.protocol.ports import ArmPort
+from workcell.sim.protocol.states import TaskState
+
+__all__ = ["POLICIES", "CoordinationPolicy", "PolicyFactory", "make_policy", "register_policy"]
+
+
+class CoordinationPolicy(Protocol):
+    """What the harness needs of a coordination policy."""
+
+    p: Problem
+    arms: list[ArmPort]
+    status: list[TaskState]
+    """Per task, its state."""
+    cause: list[str]
+    cause_kind: list[str]
+    plan: Schedule
+    """The plan followed now (after any re-solve)."""
+    dropped: frozenset[int]
+    plans: list[Schedule]
+    """Every plan followed: the one given, then one per re-solve."""
+    plan_of: list[int]
+    """Per task, the index in ``plans`` of the plan its planned times come from."""
+    failed_arms: set[int]
+    resolving: bool
+    resolves: int
+    resolve_latency: list[float]
+    resolve_budget: float
+    detours: int
+    geo_held: dict[int, list[int]]
+    """Per arm held by the geometric check, the arms in its way."""
+
+    def start(self) -> None:
+        """Dispatch the first work (before the event loop runs)."""
+
+    def arm_failed(self, a: int) -> None:
+        """Fault: arm ``a`` failed."""
+
+    def emergency_stop(self, duration: float) -> None:
+        """Fault: broadcast an emergency stop for ``duration`` seconds."""
+
+    def activate(self, zones: tuple[str, ...]) -> None:
+        """Fault: change the active zones (S2.5)."""
+
+    def part_late(self, tasks: list[int], arrival: float, part: str) -> None:
+        """Fault: ``part`` comes at ``arrival`` for ``tasks``."""
+
+    def parts_late(self, notices: Sequence[tuple[list[int], float, str]]) -> None:
+        """Fault: parts found late at one instant, ``(tasks, arrival, part)`` each."""
+
+    def task_started(self, a: int, t: int, now: float) -> None:
+        """Port: arm ``a`` left task ``t``'s start station."""
+
+    def task_ended(self, a: int, t: int, now: float) -> None:
+        """Port: arm ``a`` ended task ``t``'s trajectory."""
+
+    def check_departure(self, ctl: Any) -> bool:
+        """Port: may the arm set off towards its next station (S2.12)?"""
+
+    def check_way(self, ctl: Any) -> bool:
+        """Port: is the arm's way to its next station free?"""
+
+    def arm_moved(self) -> None:
+        """Port: an arm started or stopped moving."""
+
+
+PolicyFactory = Callable[..., CoordinationPolicy]
+"""``factory(compiled, plan, loop, link, trace, arms, **settings)``."""
+
+POLICIES: dict[str, PolicyFactory] = {"centralized": Coordinator}
+"""Registered coordination policies by name."""
+
+
+def register_policy(name: str, factory: PolicyFactory) -> None:
+    """Register a coordination policy under ``name``.
+
+    Raises
+    ------
+    UsageError
+        For a name already registered.
+    """
+    if name in POLICIES:
+        raise UsageError(f"coordination policy {name!r} is already registered")
+    POLICIES[name] = factory
+
+
+def make_policy(
+    name: str,
+    compiled: CompiledCell,
+    plan: Schedule,
+    loop: EventLoop,
+    link: Link,
+    trace: Trace,
+    arms: Sequence[ArmPort],
+    **settings: Any,
+) -> CoordinationPolicy:
+    """Build the policy registered under ``name``.
+
+    Raises
+    ------
+    UsageError
+        For an unknown name (the message lists the known ones).
+    """
+    factory = POLICIES.get(name)
+    if factory is None:
+        raise UsageError(
+            f"unknown coordination policy {name!r} (known: {', '.join(sorted(POLICIES))})"
+        )
+    return factory(compiled, plan, loop, link, trace, arms, **settings)

@@ -1,0 +1,170 @@
+"""``SimOptions``: the settings of one :func:`workcell.simulate` run.
+
+One frozen record, checked on construction: a bad value raises
+:class:`~multiarm.errors.UsageError` naming the field.
+
+Examples
+--------
+>>> SimOptions(resolve=False).resolve
+False
+>>> SimOptions(tick=0.0)
+Traceback (most recent call last):
+...
+multiarm.errors.UsageError: SimOptions.tick must be None or a period > 0 seconds, got 0.0
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+from multiarm.errors import UsageError
+from workcell.sim.control.force import FREE_THRESHOLD, HOLE_SIGMA, check_insertion
+
+__all__ = ["CONTROL_TIME", "COORDINATION_POLICIES", "SimOptions"]
+
+CONTROL_TIME = 1.25e-4
+"""Seconds of one CPU's time to control one arm for one sampling period
+(S2.2: an i860 ran 8 four-axis SCARA arms at 1 ms, so at most 1/8 ms each)."""
+
+COORDINATION_POLICIES: tuple[str, ...] = ("centralized",)
+"""The coordination policies :func:`workcell.simulate` knows (S2.7's
+centralized coordinator)."""
+
+
+def _positive(name: str, value: object, unit: str) -> float:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int | float)
+        or not (value > 0 and math.isfinite(value))
+    ):
+        raise UsageError(f"SimOptions.{name} must be a number > 0 ({unit}), got {value!r}")
+    return float(value)
+
+
+def _flag(name: str, value: object) -> bool:
+    if not isinstance(value, bool):
+        raise UsageError(f"SimOptions.{name} must be True or False, got {value!r}")
+    return value
+
+
+@dataclass(frozen=True, slots=True)
+class SimOptions:
+    """How :func:`workcell.simulate` runs (every field optional).
+
+    Attributes
+    ----------
+    resolve : bool
+        Re-solve (:func:`scheduler.reschedule`) when an arm fails, a part
+        comes late or a detour costs more than planned. ``False`` keeps the
+        plan: the following tasks wait, a failed arm's tasks are reported
+        failed (for comparing runs with and without re-solving).
+    resolve_budget : float
+        Real-time budget of one re-solve, seconds (latency measured and
+        reported against it; decisions never depend on wall time).
+    resolve_evaluations : int, optional
+        Work limit of one re-solve (schedules decoded by the local search);
+        default ``max(5, 2000 // tasks)``.
+    tick : float, optional
+        Sampling period (seconds) to model every controller tick (S2.3);
+        ``None``: event level (idle ticks skipped; the pipeline offset is
+        then computed for a 1 ms period).
+    monitor : bool or {"live", "post"}
+        The independent safety monitor: ``True`` or ``"live"`` checks
+        during the run and stops it at the first violating sample;
+        ``"post"`` checks the finished run; ``False``: off.
+    monitor_period : float
+        Seconds between the monitor's collision samples.
+    control_time : float
+        Per-arm control time per sampling period (S2.2 bound, checked when
+        ``tick`` is given).
+    insertion : {"planned", "drawn"}
+        ``"planned"``: every insertion takes the tries the compile planned.
+        ``"drawn"``: each insert step's hole position error is drawn (seeded
+        per task) and the force-guided search simulated (S1.7).
+    insertion_sigma : float
+        Standard deviation of a hole's lateral position error, metres per
+        axis (``insertion="drawn"``).
+    insertion_tolerance : float, optional
+        A try lands when within this many metres of the hole on both axes;
+        default half the search step.
+    force_threshold : float or mapping of str -> float
+        The wrist force sensors' free-motion threshold, newtons (one value,
+        or per arm name; kept as a read-only mapping).
+    zone_protocol : bool
+        ``True``: the coordinator grants zones and tools through the zone
+        manager in plan order (S2.5-S2.7). ``False`` grants every request at
+        once and skips the schedule check: an ablation for testing the
+        safety monitor, which must then catch the broken invariants.
+    geometry_guard : bool
+        ``True``: the coordinator's geometric check before each motion
+        (S2.6, S2.12: stop, detour, back off). ``False`` lets arms move
+        into each other: an ablation for testing the safety monitor.
+    strict : bool
+        On a stall (an arm with work, no stop in force and no event pending:
+        a bug of the simulator itself) raise
+        :class:`~multiarm.errors.InternalError` instead of failing the task
+        with a cause of kind ``"stall"`` (for tests and campaigns).
+    """
+
+    resolve: bool = True
+    resolve_budget: float = 0.015
+    resolve_evaluations: int | None = None
+    tick: float | None = None
+    monitor: bool | str = True
+    monitor_period: float = 0.02
+    control_time: float = CONTROL_TIME
+    insertion: str = "planned"
+    insertion_sigma: float = HOLE_SIGMA
+    insertion_tolerance: float | None = None
+    force_threshold: float | Mapping[str, float] = FREE_THRESHOLD
+    zone_protocol: bool = True
+    geometry_guard: bool = True
+    strict: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ("resolve", "zone_protocol", "geometry_guard", "strict"):
+            _flag(name, getattr(self, name))
+        if not (isinstance(self.monitor, bool) or self.monitor in ("live", "post")):
+            raise UsageError(
+                f"SimOptions.monitor must be True, False, 'live' or 'post', got {self.monitor!r}"
+            )
+        object.__setattr__(
+            self, "resolve_budget", _positive("resolve_budget", self.resolve_budget, "seconds")
+        )
+        object.__setattr__(
+            self, "monitor_period", _positive("monitor_period", self.monitor_period, "seconds")
+        )
+        object.__setattr__(
+            self, "control_time", _positive("control_time", self.control_time, "seconds")
+        )
+        ev = self.resolve_evaluations
+        if ev is not None and (isinstance(ev, bool) or not isinstance(ev, int) or ev < 1):
+            raise UsageError(
+                f"SimOptions.resolve_evaluations must be None or an integer >= 1, got {ev!r}"
+            )
+        tick = self.tick
+        if tick is not None:
+            if (
+                isinstance(tick, bool)
+                or not isinstance(tick, int | float)
+                or not (tick > 0 and math.isfinite(tick))
+            ):
+                raise UsageError(
+                    f"SimOptions.tick must be None or a period > 0 seconds, got {tick!r}"
+                )
+            object.__setattr__(self, "tick", float(tick))
+        try:
+            check_insertion(self.insertion, self.insertion_sigma, self.insertion_tolerance)
+        except UsageError as exc:
+            raise UsageError(str(exc).replace("simulate: ", "SimOptions.", 1)) from None
+        ft = self.force_threshold
+        if isinstance(ft, Mapping):
+            object.__setattr__(self, "force_threshold", MappingProxyType(dict(ft)))
+        elif isinstance(ft, bool) or not isinstance(ft, int | float):
+            raise UsageError(
+                "SimOptions.force_threshold must be a number > 0 (newtons) or a mapping "
+                f"arm name -> newtons, got {ft!r}"
+            )

@@ -1,0 +1,43 @@
+"""What the simulation's layers share: messages, published records, state machines.
+
+* :mod:`.messages` -- the records carried by the coordination messages
+  (:class:`Piece`, :class:`Leg`, :class:`Station`, :class:`Mark`);
+* :mod:`.records` -- the motion and task records an arm controller
+  publishes (:class:`MotionLog`), the safety monitor's only input;
+* :mod:`.states` -- the protocol participants' states and transition tables;
+* :mod:`.ports` -- :class:`ArmPort`, the coordinator's geometric view of an
+  arm (S2.12).
+"""
+
+from workcell.sim.protocol.messages import LEG_KINDS, PIECE_KINDS, Leg, Mark, Piece, Station
+from workcell.sim.protocol.records import MotionLog, MotionRecord, TaskRecord
+from workcell.sim.protocol.states import (
+    ARM_MACHINE,
+    MACHINES,
+    TASK_MACHINE,
+    ArmState,
+    Machine,
+    TaskState,
+    markdown,
+    mermaid,
+)
+
+__all__ = [
+    "ARM_MACHINE",
+    "LEG_KINDS",
+    "MACHINES",
+    "PIECE_KINDS",
+    "TASK_MACHINE",
+    "ArmState",
+    "Leg",
+    "Machine",
+    "Mark",
+    "MotionLog",
+    "MotionRecord",
+    "Piece",
+    "Station",
+    "TaskRecord",
+    "TaskState",
+    "markdown",
+    "mermaid",
+]

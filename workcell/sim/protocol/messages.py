@@ -1,0 +1,149 @@
+"""The records that travel between the coordination and control layers.
+
+A trajectory message (S2.7 *trajectory description + start*) carries
+:class:`Leg` records, each with its :class:`Station` list; zone requests,
+grants, sleeps, wake-ups and releases carry a :class:`Piece` (one use of a
+resource by a task). Both layers import these definitions from here and never
+each other (import-linter contracts in ``pyproject.toml``).
+
+Examples
+--------
+>>> p = Piece("zone", 0, 3, 0.5)
+>>> p.kind, p.task
+('zone', 3)
+>>> p == ("zone", 0, 3, 0.5)  # a typed record that still orders and hashes as a tuple
+True
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+from workcell.arms import JointTrajectory
+
+__all__ = ["LEG_KINDS", "PIECE_KINDS", "Leg", "Mark", "Piece", "Station"]
+
+PIECE_KINDS: tuple[str, ...] = ("zone", "move", "tool")
+"""Kinds of resource use: an exclusive zone's occupancy, movement in a
+shared (restricted-simultaneous) zone, a tool."""
+
+LEG_KINDS: tuple[str, ...] = ("travel", "task", "retreat", "return", "detour")
+"""Kinds of leg: the two sent by the coordinator (travel to a task's first
+pose, the task's own trajectory), and the three an arm runs on an
+excursion (a back-off to its home joints, the way back, a detour)."""
+
+
+class Piece(NamedTuple):
+    """One use of a resource by a task (frozen; orders and hashes as a tuple).
+
+    Attributes
+    ----------
+    kind : {"zone", "move", "tool"}
+        An exclusive zone's occupancy, movement in a shared zone, a tool.
+    resource : int
+        The zone's or tool's index in the problem.
+    task : int
+        The task (``-1 - arm`` for an arm's start zone before its first move).
+    tau : float
+        Offset in the task where the use starts, seconds.
+    """
+
+    kind: str
+    resource: int
+    task: int
+    tau: float
+
+
+class Mark(NamedTuple):
+    """A force-search event on a task leg's clock (S1.7).
+
+    Attributes
+    ----------
+    tau : float
+        Offset in the leg, seconds.
+    action : {"raise", "try"}
+        Raise the thresholds (start of the search dwell) or end a try.
+    search : int
+        Index of the search in the leg.
+    attempt : int
+        The try that ends (1-based; 0 for ``"raise"``).
+    """
+
+    tau: float
+    action: str
+    search: int
+    attempt: int
+
+
+@dataclass(slots=True)
+class Station:
+    """A point of a leg where something happens.
+
+    Attributes
+    ----------
+    tau : float
+        Offset in the leg, seconds.
+    notbefore : float
+        The arm may not pass before this absolute time (the plan's time).
+    acquire : list of Piece
+        Resources needed to pass (granted by the coordinator).
+    release : list of Piece
+        Resources given back on arrival.
+    border : int
+        Index of the mode's border here (for the executed waits), -1 if none.
+    start : bool
+        The task's start (needs the coordinator's permission).
+    end : bool
+        The leg's end.
+    requested : bool
+        Requests for ``acquire`` sent.
+    """
+
+    tau: float
+    notbefore: float = -math.inf
+    acquire: list[Piece] = field(default_factory=list)
+    release: list[Piece] = field(default_factory=list)
+    border: int = -1
+    start: bool = False
+    end: bool = False
+    requested: bool = False
+
+
+@dataclass(slots=True)
+class Leg:
+    """A piece of work sent in one trajectory message: travel or task.
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`LEG_KINDS`.
+    task : int
+    mode : int (-1 for travel)
+    trajectory : JointTrajectory
+    stations : list of Station
+        Sorted by ``tau``; the last one is the end.
+    searches : tuple of InsertSearch
+        (:class:`workcell.sim.control.force.InsertSearch`)
+        The force-guided searches of a task leg whose insertion tries are
+        drawn (:mod:`workcell.sim.control.force`); empty otherwise.
+    marks : list of Mark, or None
+        The searches' events on the leg's clock (built when the leg starts).
+    fired : int
+        Marks done.
+    """
+
+    kind: str
+    task: int
+    mode: int
+    trajectory: JointTrajectory
+    stations: list[Station]
+    searches: tuple[Any, ...] = ()
+    marks: list[Mark] | None = None
+    fired: int = 0
+
+    @property
+    def duration(self) -> float:
+        """Seconds."""
+        return float(self.trajectory.duration)
