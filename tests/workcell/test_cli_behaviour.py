@@ -29,7 +29,16 @@ def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentP
 
 def test_every_option_of_every_command_shows_its_default() -> None:
     commands = _subparsers(build_parser())
-    assert set(commands) == {"demo", "simulate", "check", "schedule", "bench", "campaign", "sweep"}
+    assert set(commands) == {
+        "demo",
+        "simulate",
+        "check",
+        "schedule",
+        "bench",
+        "campaign",
+        "sweep",
+        "view",
+    }
     for name, sub in commands.items():
         text = sub.format_help()
         options = text[text.index("\noptions:") :]

@@ -262,7 +262,7 @@ def test_simulate_writes_to_out_cellname_by_default(
     monkeypatch.chdir(tmp_path)
     assert main(["simulate", "supersigma", "--solver", "greedy"]) == 0
     text = capsys.readouterr().out
-    assert "wrote 7 files to out/supersigma/" in text
+    assert "wrote 9 files to out/supersigma/" in text
     assert text.rstrip().endswith("\nstatus: ok, 10 of 10 tasks done")  # the last line
     assert sorted(p.name for p in (tmp_path / "out" / "supersigma").iterdir()) == sorted(OUTPUTS)
 

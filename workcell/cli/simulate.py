@@ -16,7 +16,14 @@ from multiarm.errors import MultiarmError, UsageError
 from scheduler import Problem, Schedule
 from workcell.cli import args as common
 from workcell.cli.output import EXIT_FAILURES, EXIT_OK, Progress, print_table, status_line
-from workcell.pipeline import MAX_FRAMES, CellRun, load_cell_or_example, load_faults, run_cell
+from workcell.pipeline import (
+    MAX_FRAMES,
+    RUN_FILES,
+    CellRun,
+    load_cell_or_example,
+    load_faults,
+    run_cell,
+)
 from workcell.sim.harness.options import SimOptions
 from workcell.summary import run_summary
 
@@ -99,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
         _print_central_unit(result.compiled.problem, result.sim.schedule)
     print(
         f"\nwrote {len(result.written)} files to {out}/: "
-        + ", ".join(p.name for p in result.written[:7])
+        + ", ".join(p.name for p in result.written[: len(RUN_FILES)])
     )
     print(status_line(result.failed_tasks, result.compiled.problem.n_tasks))
     if result.ok or args.allow_failures:
