@@ -63,6 +63,7 @@ from tasklib.examples import EXAMPLES as TASK_EXAMPLES
 from tasklib.io import load_taskset, parse_toml, read_toml_source
 from tasklib.tdl import load_tdl
 from workcell.arms import DriveArm, arm_from_dict
+from workcell.arms.spec import MAX_LENGTH
 from workcell.compiled import SPACE_GRID
 from zones import ZoneMap, load_sdl
 from zones import examples as zone_examples
@@ -186,14 +187,10 @@ class Cell:
                 f"cell {self.name!r}: park must be 'home' or 'last', not {self.park!r}"
             )
         g = self.grid
-        if (
-            isinstance(g, bool)
-            or not isinstance(g, int | float)
-            or not (math.isfinite(g) and g >= 0)
-        ):
+        if isinstance(g, bool) or not isinstance(g, int | float) or not 0 <= g <= MAX_LENGTH:
             raise ValidationError(
-                f"cell {self.name!r}: grid must be a finite number of metres >= 0 (0: off), "
-                f"not {g!r}"
+                f"cell {self.name!r}: grid must be a number of metres in [0, {MAX_LENGTH:g}] "
+                f"(0: off), not {g!r}"
             )
         object.__setattr__(self, "grid", float(g))
         if not (math.isfinite(self.padding) and 1e-4 <= self.padding <= 0.1):
@@ -363,8 +360,10 @@ def cell_from_dict(
     grid = comp.get("grid", SPACE_GRID)
     if isinstance(grid, bool) or not isinstance(grid, int | float):
         raise _fail(f"{top}: compile.grid", f"expected a number of metres, got {grid!r}")
-    if not (math.isfinite(grid) and grid >= 0):
-        raise _fail(f"{top}: compile.grid", f"must be >= 0 metres (0: off), got {grid!r}")
+    if not 0 <= grid <= MAX_LENGTH:
+        raise _fail(
+            f"{top}: compile.grid", f"must be in [0, {MAX_LENGTH:g}] metres (0: off), got {grid!r}"
+        )
     if "separate_arms" in comp:
         # the former switch: false is grid = 0, true the grid as set
         separate = comp["separate_arms"]

@@ -63,13 +63,24 @@ __all__ = [
 ]
 
 
+MAX_SECONDS = 1e6
+"""Largest time or duration of a fault record, seconds (11.6 days; ``inf``
+where a record allows it). Physical ranges: :data:`MAX_FORCE`,
+:data:`MAX_LOSS`."""
+MAX_FORCE = 1e6
+"""Largest crash force, newtons."""
+MAX_LOSS = 1.0 - 1e-6
+"""Message-loss probabilities must be below this."""
+
+
 def _time(value: object, what: str, *, allow_inf: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ValidationError(f"{what} must be a number, got {value!r}")
     v = float(value)
-    if math.isnan(v) or v < 0 or (math.isinf(v) and not allow_inf):
+    if math.isnan(v) or (not 0 <= v <= MAX_SECONDS and not (allow_inf and v == math.inf)):
         raise ValidationError(
-            f"{what} must be {'>= 0' if allow_inf else 'finite and >= 0'} seconds, got {value!r}"
+            f"{what} must be in [0, {MAX_SECONDS:g}] seconds{' or inf' if allow_inf else ''}, "
+            f"got {value!r}"
         )
     return v
 
@@ -113,8 +124,8 @@ class Crash:
         object.__setattr__(self, "at", _time(self.at, "Crash.at"))
         object.__setattr__(self, "recovery", _time(self.recovery, "Crash.recovery"))
         f = self.force
-        if isinstance(f, bool) or not isinstance(f, int | float) or not 0 <= f < math.inf:
-            raise ValidationError(f"Crash.force must be a number >= 0 (newtons), got {f!r}")
+        if isinstance(f, bool) or not isinstance(f, int | float) or not 0 <= f <= MAX_FORCE:
+            raise ValidationError(f"Crash.force must be in [0, {MAX_FORCE:g}] newtons, got {f!r}")
         object.__setattr__(self, "force", float(f))
 
 
@@ -138,8 +149,9 @@ class LostSync:
         if isinstance(self.axis, bool) or not isinstance(self.axis, int) or self.axis < 0:
             raise ValidationError(f"LostSync.axis must be an integer >= 0, got {self.axis!r}")
         object.__setattr__(self, "at", _time(self.at, "LostSync.at"))
-        if isinstance(self.steps, bool) or not isinstance(self.steps, int) or self.steps < 1:
-            raise ValidationError(f"LostSync.steps must be an integer >= 1, got {self.steps!r}")
+        s = self.steps
+        if isinstance(s, bool) or not isinstance(s, int) or not 1 <= s <= 10**6:
+            raise ValidationError(f"LostSync.steps must be an integer in [1, 1e6], got {s!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -154,8 +166,8 @@ class MessageLoss:
 
     def __post_init__(self) -> None:
         p = self.probability
-        if isinstance(p, bool) or not isinstance(p, int | float) or not (0.0 <= float(p) < 1.0):
-            raise ValidationError(f"MessageLoss.probability must be in [0, 1), got {p!r}")
+        if isinstance(p, bool) or not isinstance(p, int | float) or not 0.0 <= p < MAX_LOSS:
+            raise ValidationError(f"MessageLoss.probability must be in [0, 1 - 1e-6), got {p!r}")
         object.__setattr__(self, "probability", float(p))
         if self.kinds is not None:
             kinds: object = self.kinds
@@ -165,8 +177,11 @@ class MessageLoss:
                 )
             object.__setattr__(self, "kinds", tuple(self.kinds))
         t = _time(self.timeout, "MessageLoss.timeout")
-        if t <= 0:
-            raise ValidationError(f"MessageLoss.timeout must be > 0 seconds, got {self.timeout!r}")
+        if t < 1e-6:
+            raise ValidationError(
+                f"MessageLoss.timeout must be in [1e-06, {MAX_SECONDS:g}] seconds, "
+                f"got {self.timeout!r}"
+            )
         object.__setattr__(self, "timeout", t)
 
 
