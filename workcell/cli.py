@@ -562,9 +562,12 @@ def _write_run(out: Path, compiled: Any, schedule: Any, result: Any, frames: int
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     """Compile, schedule and simulate one cell; print the summary, write the outputs."""
+    from workcell.faultcheck import check_faults
+
     _check_sim_args(args)
     cell = _load_cell_arg(args.cell)
     faults = _load_faults(args.faults) if args.faults else None
+    check_faults(cell, faults, source=args.faults)  # names: before the compile
     out = _out_dir(args.out or str(Path("out") / cell.name))
     from scheduler import solve, validate
     from workcell.sim.options import SimOptions
@@ -575,6 +578,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         bar.set_postfix_str("compile")
         compiled = _compile_with_bar(cell)
         problem = compiled.problem
+        check_faults(compiled, faults, source=args.faults)  # times: before the solve
         bar.update(1)
         bar.set_postfix_str(f"schedule ({args.solver}, {args.time_limit:g} s)")
         options = None

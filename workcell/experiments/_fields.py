@@ -53,7 +53,8 @@ MAX_GENERATED = (1_000, 10_000, 1_000, 1_000)
 
 def _int(w: _Where, value: Any, where: str, least: int = 0, most: int = MAX_INT) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not least <= value <= most:
-        bound = f">= {least}" + ("" if most == MAX_INT else f" and <= {most}")
+        above = isinstance(value, int) and not isinstance(value, bool) and value > most
+        bound = f">= {least}" + (f" and <= {most}" if most != MAX_INT or above else "")
         raise w.fail(where, f"expected an integer {bound}, got {value!r}")
     return value
 
