@@ -187,10 +187,14 @@ class Cell:
                 f"cell {self.name!r}: park must be 'home' or 'last', not {self.park!r}"
             )
         g = self.grid
-        if isinstance(g, bool) or not isinstance(g, int | float) or not 0 <= g <= MAX_LENGTH:
+        if (
+            isinstance(g, bool)
+            or not isinstance(g, int | float)
+            or not (g == 0 or MIN_GRID <= g <= MAX_LENGTH)
+        ):
             raise ValidationError(
-                f"cell {self.name!r}: grid must be a number of metres in [0, {MAX_LENGTH:g}] "
-                f"(0: off), not {g!r}"
+                f"cell {self.name!r}: grid must be 0 (off) or a number of metres in "
+                f"[{MIN_GRID:g}, {MAX_LENGTH:g}], not {g!r}"
             )
         object.__setattr__(self, "grid", float(g))
         if not (math.isfinite(self.padding) and 1e-4 <= self.padding <= 0.1):
@@ -229,6 +233,11 @@ class Cell:
 
 _TOP_KEYS = {"name", "description", "zones", "tasks", "tdl", "compile", "arms"}
 _COMPILE_KEYS = {"plan_with", "releases", "seed", "padding", "park", "grid", "separate_arms"}
+
+
+MIN_GRID = 0.01
+"""Smallest block side of the space grid, metres (the arms' capsules are
+centimetres thick; finer blocks only multiply the zones)."""
 
 
 def _fail(where: str, message: str) -> ValidationError:
@@ -360,9 +369,10 @@ def cell_from_dict(
     grid = comp.get("grid", SPACE_GRID)
     if isinstance(grid, bool) or not isinstance(grid, int | float):
         raise _fail(f"{top}: compile.grid", f"expected a number of metres, got {grid!r}")
-    if not 0 <= grid <= MAX_LENGTH:
+    if not (grid == 0 or MIN_GRID <= grid <= MAX_LENGTH):
         raise _fail(
-            f"{top}: compile.grid", f"must be in [0, {MAX_LENGTH:g}] metres (0: off), got {grid!r}"
+            f"{top}: compile.grid",
+            f"must be 0 (off) or in [{MIN_GRID:g}, {MAX_LENGTH:g}] metres, got {grid!r}",
         )
     if "separate_arms" in comp:
         # the former switch: false is grid = 0, true the grid as set
