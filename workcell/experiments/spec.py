@@ -42,6 +42,12 @@ Paths are relative to the sweep file::
     seeds = [0]                          # solver seeds; "instance" uses the problem's seed
     options = { workers = 2 }            # TreeOptions / GreedyOptions / CpSatOptions fields
 
+Sizes are capped before any run: at most
+:data:`~workcell.experiments._fields.MAX_RUNS` (100,000) runs in a sweep
+file, generated instances of at most 1,000 arms, 10,000 tasks, 1,000 zones
+and tools, time limits in 1e-6 .. 1e6 s, seeds below 2**62; a field over
+its cap is an error naming it (``s.toml: sweep.repetitions: ...``).
+
 ``[sweep] workers`` sets the local processes used when the caller names none
 (timed comparisons set 1). An optional ``[quick]`` table reduces the grid
 for a smoke run (:meth:`Sweep.quick_version`): ``instances`` (names or shell
