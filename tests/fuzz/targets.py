@@ -16,7 +16,9 @@ the bytes into changes of numeric fields of a small built-in cell and
 compiles it with a tiny task set.
 
 The targets import only public names of the package, except the fault-file
-reader, which today is the command line's (``workcell.cli._load_faults``).
+reader, which today is the command line's (``workcell.cli._load_faults``);
+the fault targets then check the records against the built-in supersigma cell
+(:func:`workcell.faultcheck.check_faults`, the names; no compile).
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ __all__ = [
     "compile_cells_seen",
     "compile_mutations",
     "compile_tasks_file",
+    "faults_cell",
     "seed_files",
     "seed_inputs",
 ]
@@ -179,10 +182,21 @@ def _load_fjsp(path: Path) -> object:
     return read_fjsp(path)
 
 
+@functools.cache
+def faults_cell() -> Any:
+    """The built-in cell the ``faults_*`` targets' records are checked against."""
+    from workcell import load_example
+
+    return load_example("supersigma")
+
+
 def _load_faults(path: Path) -> object:
     from workcell import cli
+    from workcell.faultcheck import check_faults
 
-    return cli._load_faults(str(path))
+    plan = cli._load_faults(str(path))
+    check_faults(faults_cell(), plan, source=str(path))
+    return plan
 
 
 def _load_sweep(path: Path) -> object:
