@@ -88,3 +88,9 @@ def test_ctrl_c_stops_a_long_generation_at_once() -> None:
             proc.wait()
     assert proc.returncode != 0
     assert "KeyboardInterrupt" in err
+
+
+@pytest.mark.parametrize("bad", [1e300, 0.0, {"left": 1e300}, {"left": -1.0}])
+def test_force_thresholds_have_a_physical_range(bad: object) -> None:
+    with pytest.raises(UsageError, match=r"SimOptions\.force_threshold must be a number in"):
+        SimOptions(force_threshold=bad)  # type: ignore[arg-type]

@@ -166,10 +166,12 @@ class SimOptions:
         except UsageError as exc:
             raise UsageError(str(exc).replace("simulate: ", "SimOptions.", 1)) from None
         ft = self.force_threshold
+        values = list(ft.values()) if isinstance(ft, Mapping) else [ft]
+        for v in values:
+            if isinstance(v, bool) or not isinstance(v, int | float) or not 1e-6 <= v <= 1e6:
+                raise UsageError(
+                    "SimOptions.force_threshold must be a number in [1e-06, 1e+06] newtons or a "
+                    f"mapping arm name -> newtons, got {ft!r}"
+                )
         if isinstance(ft, Mapping):
             object.__setattr__(self, "force_threshold", MappingProxyType(dict(ft)))
-        elif isinstance(ft, bool) or not isinstance(ft, int | float):
-            raise UsageError(
-                "SimOptions.force_threshold must be a number > 0 (newtons) or a mapping "
-                f"arm name -> newtons, got {ft!r}"
-            )
