@@ -340,14 +340,13 @@ def generate_taskset(
     >>> len(generate_taskset(37, seed=2).tasks)
     37
     """
+    given: object = n_tasks
     if (
-        isinstance(n_tasks, bool)
-        or not isinstance(n_tasks, numbers.Integral)
-        or not 1 <= n_tasks <= MAX_TASKS
+        isinstance(given, bool)
+        or not isinstance(given, numbers.Integral)
+        or not 1 <= int(given) <= MAX_TASKS
     ):
-        raise ValidationError(
-            f"generate_taskset needs n_tasks in [1, {MAX_TASKS}], got {n_tasks!r}"
-        )
+        raise ValidationError(f"generate_taskset needs n_tasks in [1, {MAX_TASKS}], got {given!r}")
     rng = as_rng(seed)
     ts = c.taskset_open(name or f"generated{n_tasks}", f"generated: {n_tasks} tasks")
     if sites is None:
