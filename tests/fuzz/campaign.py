@@ -86,6 +86,18 @@ class FuzzRun:
     distinct: int | None = None
 
 
+def _excerpt(stdout: str, stderr: str) -> str:
+    """The lines that explain a run: from the first error report (an uncaught
+    exception, libFuzzer's ``==ERROR``, a deadly signal) on, else the last 60
+    lines of each stream, and the return status."""
+    lines = (stdout + "\n" + stderr).splitlines()
+    marks = ("Uncaught Python exception", "==ERROR", "ERROR: libFuzzer", "deadly signal")
+    first = next((i for i, line in enumerate(lines) if any(m in line for m in marks)), None)
+    if first is not None:
+        return "\n".join(lines[max(0, first - 5) : first + 80])
+    return "\n".join([*stdout.splitlines()[-60:], "--- stderr:", *stderr.splitlines()[-60:]])
+
+
 def _last_int(pattern: str, text: str) -> int | None:
     found = re.findall(pattern, text)
     return int(found[-1]) if found else None
@@ -168,7 +180,7 @@ def fuzz_target(
     elif "out-of-memory" in log:
         status = "oom"
     elif proc.returncode != 0:
-        status = "error"
+        status = f"error (status {proc.returncode})"
     else:
         status = "ok"
     if artifacts is None:
@@ -184,7 +196,7 @@ def fuzz_target(
         corpus=_last_int(r"\bcorp: (\d+)", log),
         seeds=len(files),
         artifact=written[-1] if written else None,
-        log="\n".join(log.splitlines()[-60:]),
+        log=_excerpt(proc.stdout, proc.stderr),
         per_target=json.loads(counts[-1]) if counts else None,
         distinct=_last_int(r"compile harness: (\d+) distinct cells", log),
     )
