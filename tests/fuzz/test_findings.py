@@ -73,6 +73,24 @@ CASES = [
     ("faults_toml/int-too-many-digits.toml", _faults, UsageError, "too many digits"),
     ("faults_toml/recursion-deep-array.toml", _faults, UsageError, "nested too deeply"),
     ("faults_toml/kind-unhashable.toml", _faults, UsageError, ".kind: unknown fault kind"),
+    (
+        "faults_json/message-loss-kinds-number.json",
+        _faults,
+        UsageError,
+        "MessageLoss.kinds must be a list of message kinds",
+    ),
+    (
+        "faults_toml/message-loss-kinds-number.toml",
+        _faults,
+        UsageError,
+        "faults[0] (message_loss): MessageLoss.kinds must be a list of message kinds, got 5.0",
+    ),
+    (
+        "faults_toml/activate-zones-number.toml",
+        _faults,
+        UsageError,
+        "faults[0] (activate_zones): ActivateZones.zones must be a list of zone names, got 3",
+    ),
 ]
 
 PADDING = {

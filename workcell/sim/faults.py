@@ -178,7 +178,9 @@ class MessageLoss:
         object.__setattr__(self, "probability", float(p))
         if self.kinds is not None:
             kinds: object = self.kinds
-            if isinstance(kinds, str) or not all(isinstance(k, str) and k for k in self.kinds):
+            if not isinstance(kinds, tuple | list) or not all(
+                isinstance(k, str) and k for k in kinds
+            ):
                 raise ValidationError(
                     f"MessageLoss.kinds must be a list of message kinds, got {self.kinds!r}"
                 )
@@ -231,9 +233,8 @@ class ActivateZones:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "at", _time(self.at, "ActivateZones.at"))
-        if isinstance(self.zones, str) or not all(  # type: ignore[unreachable]
-            isinstance(z, str) and z for z in self.zones
-        ):
+        zones: object = self.zones
+        if not isinstance(zones, tuple | list) or not all(isinstance(z, str) and z for z in zones):
             raise ValidationError(
                 f"ActivateZones.zones must be a list of zone names, got {self.zones!r}"
             )
