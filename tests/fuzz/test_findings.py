@@ -67,6 +67,12 @@ CASES = [
     ("sdl/wall-normal-overflow.sdl", load_sdl, SDLError, "too long to normalise"),
     ("cell/int-too-many-digits.toml", load_cell, FormatError, "too many digits"),
     ("cell/recursion-deep-array.toml", load_cell, FormatError, "nested too deeply"),
+    (
+        "cell/urdf-package-dotted-name.toml",
+        load_cell,
+        ValidationError,
+        "arms.ur_left.urdf: package 'examion.urdf' is not installed",
+    ),
     ("faults_json/int-too-many-digits.json", _faults, UsageError, "too many digits"),
     ("faults_json/recursion-deep-array.json", _faults, UsageError, "nested too deeply"),
     ("faults_json/kind-unhashable.json", _faults, UsageError, ".kind: unknown fault kind"),
