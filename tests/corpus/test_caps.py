@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import pytest
 
@@ -14,8 +13,6 @@ from tasklib.examples import generate_taskset
 from workcell.sim import MessageLoss, SimOptions
 from workcell.sim.faults import MAX_LOSS
 from workcell.sim.options import RANGES
-
-ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.parametrize(
