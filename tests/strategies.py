@@ -498,7 +498,7 @@ def numeric_cell_data() -> dict[str, object]:
         "name": "numbers",
         "zones": "builtin:supersigma",
         "tasks": "builtin:supersigma",
-        "compile": {"padding": 0.005, "seed": 0},
+        "compile": {"padding": 0.005, "seed": 0, "grid": 0.3},
         "arms": {
             "g": {
                 "type": "gantry",
@@ -510,12 +510,17 @@ def numeric_cell_data() -> dict[str, object]:
                 "tools": ["screwdriver"],
                 "payload": 2.0,
                 "start": [0.02, 0.6, 0.6, 0.0],
+                "yaw_limits": [-3.14, 3.14],
                 "stepper": {
                     "steps_per_turn": 400,
                     "step_length": 0.0000375,
                     "max_rate": 15000.0,
                     "low_rate": 1000.0,
                     "stop_accel": 4.0,
+                    "curves": {"light": 2.0, "loaded": 1.0},
+                    "short_steps": 32,
+                    "homing_rate": 4000.0,
+                    "switch_hysteresis": 40,
                 },
             },
             "s": {
@@ -527,6 +532,8 @@ def numeric_cell_data() -> dict[str, object]:
                 "max_velocity": [3.0, 4.0, 1.0, 6.0],
                 "max_acceleration": [10.0, 15.0, 5.0, 30.0],
                 "max_jerk": [100.0, 150.0, 50.0, 300.0],
+                "joint_limits": [[-2.9, 2.9], [-2.6, 2.6], [0.0, 0.35], [-6.2, 6.2]],
+                "home": [0.0, 1.5, 0.35, 0.0],
                 "radius": 0.05,
                 "payload": 3.0,
             },

@@ -63,6 +63,7 @@ from tasklib.examples import EXAMPLES as TASK_EXAMPLES
 from tasklib.io import load_taskset, parse_toml, read_toml_source
 from tasklib.tdl import load_tdl
 from workcell.arms import DriveArm, arm_from_dict
+from workcell.arms.spec import MAX_LENGTH
 from workcell.compiled import SPACE_GRID
 from zones import ZoneMap, load_sdl
 from zones import examples as zone_examples
@@ -189,11 +190,11 @@ class Cell:
         if (
             isinstance(g, bool)
             or not isinstance(g, int | float)
-            or not (math.isfinite(g) and g >= 0)
+            or not (g == 0 or MIN_GRID <= g <= MAX_LENGTH)
         ):
             raise ValidationError(
-                f"cell {self.name!r}: grid must be a finite number of metres >= 0 (0: off), "
-                f"not {g!r}"
+                f"cell {self.name!r}: grid must be 0 (off) or a number of metres in "
+                f"[{MIN_GRID:g}, {MAX_LENGTH:g}], not {g!r}"
             )
         object.__setattr__(self, "grid", float(g))
         if not (math.isfinite(self.padding) and 1e-4 <= self.padding <= 0.1):
@@ -232,6 +233,11 @@ class Cell:
 
 _TOP_KEYS = {"name", "description", "zones", "tasks", "tdl", "compile", "arms"}
 _COMPILE_KEYS = {"plan_with", "releases", "seed", "padding", "park", "grid", "separate_arms"}
+
+
+MIN_GRID = 0.01
+"""Smallest block side of the space grid, metres (the arms' capsules are
+centimetres thick; finer blocks only multiply the zones)."""
 
 
 def _fail(where: str, message: str) -> ValidationError:
@@ -363,8 +369,11 @@ def cell_from_dict(
     grid = comp.get("grid", SPACE_GRID)
     if isinstance(grid, bool) or not isinstance(grid, int | float):
         raise _fail(f"{top}: compile.grid", f"expected a number of metres, got {grid!r}")
-    if not (math.isfinite(grid) and grid >= 0):
-        raise _fail(f"{top}: compile.grid", f"must be >= 0 metres (0: off), got {grid!r}")
+    if not (grid == 0 or MIN_GRID <= grid <= MAX_LENGTH):
+        raise _fail(
+            f"{top}: compile.grid",
+            f"must be 0 (off) or in [{MIN_GRID:g}, {MAX_LENGTH:g}] metres, got {grid!r}",
+        )
     if "separate_arms" in comp:
         # the former switch: false is grid = 0, true the grid as set
         separate = comp["separate_arms"]

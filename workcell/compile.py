@@ -493,7 +493,10 @@ def _pair_windows(
     reach = [
         np.stack([np.min([b[0] for b in bs], 0), np.max([b[1] for b in bs], 0)]) for bs in boxes
     ]
-    blocks = shared_blocks(reach, grid)
+    try:
+        blocks = shared_blocks(reach, grid)
+    except ValidationError as exc:  # name the cell file's field (or the cell)
+        raise ValidationError(f"{cell.source or repr(cell.name)}: compile.grid: {exc}") from None
     if blocks.n_zones == 0:
         return modes, ()
     names = blocks.zone_names()

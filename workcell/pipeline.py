@@ -61,6 +61,7 @@ from scheduler.tree import TreeOptions
 from workcell.cell import EXAMPLES, Cell, load_cell, load_example
 from workcell.compile import CompiledCell, compile_cell
 from workcell.compiled import CompileOptions
+from workcell.faultcheck import check_faults
 from workcell.sim.harness.faults import Fault, FaultPlan, as_plan
 from workcell.sim.harness.options import SimOptions
 from workcell.sim.harness.simulate import MediumSpec, SimResult, simulate
@@ -85,6 +86,7 @@ __all__ = [
     "check_out_dir",
     "default_evaluations",
     "failure_candidate",
+    "faults_source",
     "load_cell_or_example",
     "load_faults",
     "run_cell",
@@ -307,8 +309,10 @@ def load_faults(faults: FaultsLike, cell: Cell | CompiledCell | None = None) -> 
         A path is a ``.toml`` file of ``[[faults]]`` tables or a ``.json``
         list of records (or ``{"faults": [...]}``); None is no fault.
     cell : Cell or CompiledCell, optional
-        The cell the faults are for (reserved for checks against the cell;
-        the simulation checks names again).
+        The cell the faults are for: their arms, parts, zones and message
+        kinds are checked against it (:func:`workcell.faultcheck.check_faults`);
+        against a compiled cell, their times too (none after any possible
+        plan end).
 
     Returns
     -------
@@ -318,15 +322,22 @@ def load_faults(faults: FaultsLike, cell: Cell | CompiledCell | None = None) -> 
     ------
     UsageError
         An unreadable file, or a file that is not ``.toml`` or ``.json``.
+    ValidationError
+        A record that does not fit the cell (an unknown arm, part, zone or
+        message kind; an arm failing twice; a time after any plan's end).
     FormatError
         A malformed file or record (``file:line:col``, or the file and the
         record's index and field).
     """
     plan = _read_fault_file(Path(faults)) if isinstance(faults, str | PathLike) else as_plan(faults)
     if cell is not None:
-        pass  # the checks of fault records against the cell (before any compile) go here;
-        # until then simulate() checks arm, part and zone names against the compiled cell
+        check_faults(cell, plan, source=faults_source(faults))
     return plan
+
+
+def faults_source(faults: FaultsLike) -> str | None:
+    """The name fault errors start with: the file's path, or None for records."""
+    return str(faults) if isinstance(faults, str | PathLike) else None
 
 
 def check_out_dir(out: str | PathLike[str], *, create: bool = True) -> Path:
@@ -465,11 +476,16 @@ def solve_cell(
     seed: int = 0,
     compile_options: CompileOptions | None = None,
     progress: StepCallback | None = None,
+    faults: FaultPlan | None = None,
+    faults_from: str | None = None,
 ) -> SolvedCell:
     """Compile ``cell`` (unless compiled already), solve it and validate the schedule.
 
     Parameters are those of :func:`run_cell`; ``time_limit=None`` with
-    ``evaluations`` runs on the work limit alone (no clock).
+    ``evaluations`` runs on the work limit alone (no clock). ``faults``
+    (read by :func:`load_faults`, from the file ``faults_from``) are checked
+    against the compiled cell before the solve: no fault after any possible
+    plan end.
 
     Returns
     -------
@@ -497,6 +513,8 @@ def solve_cell(
         if progress is not None:
             progress("compile", f"{len(cell.taskset.tasks)} tasks, {len(cell.arms)} arms")
         compiled = compile_cell(cell, options=compile_options)
+    if faults:
+        check_faults(compiled, faults, source=faults_from)  # the times: before the solve
     if progress is not None:
         limit = f"{evaluations} evaluations, " if evaluations is not None else ""
         clock = "no time limit" if time_limit is None else f"time limit {time_limit:g} s"
@@ -656,6 +674,8 @@ def run_cell(
         seed=seed,
         compile_options=compile_options,
         progress=progress,
+        faults=plan,
+        faults_from=faults_source(faults),
     )
     return run_solved(
         solved,

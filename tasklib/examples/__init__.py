@@ -27,6 +27,7 @@ Examples
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable, Sequence
 from importlib import resources
 
@@ -291,6 +292,10 @@ _CAPS = ("vacuum", "camera", "dual_gripper")
 _TOOLS = ("screwdriver", "glue_gun", "press")
 
 
+MAX_TASKS = 100_000
+"""Most tasks :func:`generate_taskset` makes (a larger request is a typo, not a cell)."""
+
+
 def generate_taskset(
     n_tasks: int = 200,
     seed: Seed = 0,
@@ -315,7 +320,7 @@ def generate_taskset(
     Parameters
     ----------
     n_tasks : int
-        Number of tasks, exactly (>= 1).
+        Number of tasks, exactly (1 .. :data:`MAX_TASKS`).
     seed : int or numpy.random.Generator
         The same seed gives the same task set.
     sites : sequence of (feeder position, station position), optional
@@ -335,8 +340,13 @@ def generate_taskset(
     >>> len(generate_taskset(37, seed=2).tasks)
     37
     """
-    if n_tasks < 1:
-        raise ValidationError(f"generate_taskset needs n_tasks >= 1, got {n_tasks}")
+    given: object = n_tasks
+    if (
+        isinstance(given, bool)
+        or not isinstance(given, numbers.Integral)
+        or not 1 <= int(given) <= MAX_TASKS
+    ):
+        raise ValidationError(f"generate_taskset needs n_tasks in [1, {MAX_TASKS}], got {given!r}")
     rng = as_rng(seed)
     ts = c.taskset_open(name or f"generated{n_tasks}", f"generated: {n_tasks} tasks")
     if sites is None:

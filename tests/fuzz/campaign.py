@@ -21,7 +21,6 @@ from __future__ import annotations
 import argparse
 import json
 import re
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -29,7 +28,7 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from tests.fuzz.targets import ROOT, TARGETS, seed_files
+from tests.fuzz.targets import ALL, ROOT, TARGETS, seed_inputs
 
 __all__ = ["FuzzRun", "fuzz_target", "main"]
 
@@ -64,6 +63,12 @@ class FuzzRun:
         The input of the finding.
     log : str
         The last lines of the fuzzer's output.
+    per_target : dict of str to int, or None
+        For the multiplexed target ``all``: inputs run by each target (as
+        last reported by the process, every 200 inputs).
+    distinct : int or None
+        For ``compile``: distinct cells compiled (the harness answers a cell
+        it has compiled before from a memo; reported every 50).
     """
 
     target: str
@@ -77,6 +82,20 @@ class FuzzRun:
     seeds: int
     artifact: str | None
     log: str
+    per_target: dict[str, int] | None = None
+    distinct: int | None = None
+
+
+def _excerpt(stdout: str, stderr: str) -> str:
+    """The lines that explain a run: from the first error report (an uncaught
+    exception, libFuzzer's ``==ERROR``, a deadly signal) on, else the last 60
+    lines of each stream, and the return status."""
+    lines = (stdout + "\n" + stderr).splitlines()
+    marks = ("Uncaught Python exception", "==ERROR", "ERROR: libFuzzer", "deadly signal")
+    first = next((i for i, line in enumerate(lines) if any(m in line for m in marks)), None)
+    if first is not None:
+        return "\n".join(lines[max(0, first - 5) : first + 80])
+    return "\n".join([*stdout.splitlines()[-60:], "--- stderr:", *stderr.splitlines()[-60:]])
 
 
 def _last_int(pattern: str, text: str) -> int | None:
@@ -99,7 +118,8 @@ def fuzz_target(
     Parameters
     ----------
     name : str
-        A key of :data:`~tests.fuzz.targets.TARGETS`.
+        A key of :data:`~tests.fuzz.targets.TARGETS`, or ``"all"`` (every
+        target in one process, :class:`~tests.fuzz.targets.Multiplex`).
     runs : int
         Inputs to execute (libFuzzer ``-runs``).
     max_time : int
@@ -118,9 +138,9 @@ def fuzz_target(
         work, seeds, corpus = Path(tmp, "work"), Path(tmp, "seeds"), Path(tmp, "corpus")
         for d in (work, seeds, corpus):
             d.mkdir()
-        files = seed_files(name)
-        for i, f in enumerate(files):
-            shutil.copyfile(f, seeds / f"{i:03d}_{f.name}")
+        files = seed_inputs(name)
+        for i, (label, data) in enumerate(files):
+            (seeds / f"{i:03d}_{label}").write_bytes(data)
         out = Path(artifacts) if artifacts is not None else Path(tmp, "artifacts")
         out.mkdir(parents=True, exist_ok=True)
         cmd = [
@@ -152,6 +172,7 @@ def fuzz_target(
         seconds = time.perf_counter() - t0
     log = proc.stdout + proc.stderr
     written = re.findall(r"Test unit written to (\S+)", log)
+    counts = re.findall(r"multiplex counts: (\{.*\})", log)
     if "Uncaught Python exception" in log or "fuzz target exited" in log:
         status = "crash"
     elif "ALARM: working on the last Unit" in log or "libFuzzer: timeout" in log:
@@ -159,7 +180,7 @@ def fuzz_target(
     elif "out-of-memory" in log:
         status = "oom"
     elif proc.returncode != 0:
-        status = "error"
+        status = f"error (status {proc.returncode})"
     else:
         status = "ok"
     if artifacts is None:
@@ -175,8 +196,13 @@ def fuzz_target(
         corpus=_last_int(r"\bcorp: (\d+)", log),
         seeds=len(files),
         artifact=written[-1] if written else None,
-        log="\n".join(log.splitlines()[-60:]),
+        log=_excerpt(proc.stdout, proc.stderr),
+        per_target=json.loads(counts[-1]) if counts else None,
+        distinct=_last_int(r"compile harness: (\d+) distinct cells", log),
     )
+
+
+_ORDER = {name: i for i, name in enumerate([*TARGETS, ALL])}
 
 
 def _markdown(results: list[FuzzRun], args: argparse.Namespace) -> str:
@@ -197,8 +223,9 @@ def _markdown(results: list[FuzzRun], args: argparse.Namespace) -> str:
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in results:
+        inputs = f"{r.inputs}" + (f" ({r.distinct}+ distinct cells)" if r.distinct else "")
         lines.append(
-            f"| {r.target} | {r.status} | {r.inputs} | {r.exec_per_s:.0f} | {r.coverage} "
+            f"| {r.target} | {r.status} | {inputs} | {r.exec_per_s:.0f} | {r.coverage} "
             f"| {r.features} | {r.corpus} | {r.seeds} | {r.seconds} |"
         )
     return "\n".join(lines) + "\n"
@@ -215,12 +242,21 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--targets", default="", help="comma-separated (default: all)")
     ap.add_argument("--artifacts", type=Path, default=ROOT / ".fuzz", help="findings go here")
     ap.add_argument("--out", type=Path, default=None, help="write PREFIX.json and PREFIX.md")
+    ap.add_argument(
+        "--merge",
+        action="store_true",
+        help="keep the rows of PREFIX.json of the targets not run now (one table, many runs)",
+    )
     args = ap.parse_args(argv)
     names = [n for n in args.targets.split(",") if n] or list(TARGETS)
-    unknown = [n for n in names if n not in TARGETS]
+    unknown = [n for n in names if n not in TARGETS and n != ALL]
     if unknown:
         ap.error(f"unknown target {unknown[0]!r} (known: {', '.join(TARGETS)})")
-    results = []
+    kept: list[FuzzRun] = []
+    if args.merge and args.out is not None and args.out.with_suffix(".json").is_file():
+        old = json.loads(args.out.with_suffix(".json").read_text(encoding="utf-8"))
+        kept = [FuzzRun(**(r | {"log": ""})) for r in old if r["target"] not in names]
+    results: list[FuzzRun] = []
     for name in names:
         r = fuzz_target(
             name,
@@ -240,11 +276,12 @@ def main(argv: list[str] | None = None) -> int:
         if r.status != "ok":
             print(r.log, flush=True)
         if args.out is not None:
+            table = sorted(kept + results, key=lambda x: _ORDER.get(x.target, len(_ORDER)))
             args.out.with_suffix(".json").write_text(
-                json.dumps([asdict(x) | {"log": None} for x in results], indent=1) + "\n",
+                json.dumps([asdict(x) | {"log": None} for x in table], indent=1) + "\n",
                 encoding="utf-8",
             )
-            args.out.with_suffix(".md").write_text(_markdown(results, args), encoding="utf-8")
+            args.out.with_suffix(".md").write_text(_markdown(table, args), encoding="utf-8")
     return 0 if all(r.status == "ok" for r in results) else 1
 
 

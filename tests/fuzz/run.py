@@ -4,6 +4,9 @@ Usage (the driver :mod:`tests.fuzz.campaign` builds these command lines)::
 
     python -m tests.fuzz.run TARGET WORKDIR [libFuzzer flags and corpus folders]
 
+``TARGET`` is a key of :data:`tests.fuzz.targets.TARGETS`, or ``all``: every
+target in this one process (:class:`tests.fuzz.targets.Multiplex`).
+
 ``WORKDIR`` is a folder the target writes its input files into. Our
 packages (and lark, whose parser the SDL and TDL grammars run in) are
 instrumented for coverage; the modules compiled by numba are not (numba
@@ -40,15 +43,16 @@ def main(argv: list[str]) -> None:
     name, workdir = argv[1], Path(argv[2])
     root = Path(__file__).resolve().parents[2]
     with atheris.instrument_imports(include=list(PACKAGES), exclude=_numba_modules(root)):
-        from tests.fuzz.targets import TARGETS
+        from tests.fuzz.targets import ALL, TARGETS, Multiplex
 
-        target = TARGETS[name]
+        target = Multiplex() if name == ALL else TARGETS[name]
         # import (and so instrument) every module the target reaches; a
         # finding on the empty input is found again by the fuzzer below
-        try:
-            target(b"", workdir)
-        except Exception as exc:
-            print(f"warm-up: {type(exc).__name__}: {exc}", file=sys.stderr)
+        for each in TARGETS if name == ALL else [name]:
+            try:
+                TARGETS[each](b"", workdir)
+            except Exception as exc:
+                print(f"warm-up {each}: {type(exc).__name__}: {exc}", file=sys.stderr)
 
     def one_input(data: bytes) -> None:
         target(data, workdir)

@@ -16,7 +16,9 @@ the bytes into changes of numeric fields of a small built-in cell and
 compiles it with a tiny task set.
 
 The targets import only public names of the package, except the fault-file
-reader, which today is the command line's (``workcell.cli._load_faults``).
+reader, which today is the command line's (``workcell.cli._load_faults``);
+the fault targets then check the records against the built-in supersigma cell
+(:func:`workcell.faultcheck.check_faults`, the names; no compile).
 """
 
 from __future__ import annotations
@@ -35,16 +37,22 @@ from typing import Any
 from multiarm.errors import InfeasibleError, MultiarmError, ScheduleError, SourceError
 
 __all__ = [
+    "ALL",
+    "ALL_ORDER",
     "COMPILE_FIELDS",
     "KNOWN_FOREIGN",
     "PENDING_RANGES",
     "TARGETS",
+    "Multiplex",
     "Target",
     "Unlocated",
     "check",
+    "compile_cells_seen",
     "compile_mutations",
     "compile_tasks_file",
+    "faults_cell",
     "seed_files",
+    "seed_inputs",
 ]
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -174,10 +182,21 @@ def _load_fjsp(path: Path) -> object:
     return read_fjsp(path)
 
 
+@functools.cache
+def faults_cell() -> Any:
+    """The built-in cell the ``faults_*`` targets' records are checked against."""
+    from workcell import load_example
+
+    return load_example("supersigma")
+
+
 def _load_faults(path: Path) -> object:
     from workcell import cli
+    from workcell.faultcheck import check_faults
 
-    return cli._load_faults(str(path))
+    plan = cli._load_faults(str(path))
+    check_faults(faults_cell(), plan, source=str(path))
+    return plan
 
 
 def _load_sweep(path: Path) -> object:
@@ -278,15 +297,32 @@ def _set(data: dict[str, Any], field: tuple[str, ...], value: float) -> None:
         node[last] = value
 
 
+_COMPILED: set[tuple[tuple[tuple[str, ...], bytes], ...]] = set()
+"""Mutation lists whose cell the ``compile`` harness has already compiled
+without a finding: the compile is deterministic, so an input decoding to one
+of them is answered at once (libFuzzer's mutations of short inputs decode
+to the same few cells again and again)."""
+
+
+def compile_cells_seen() -> int:
+    """Distinct cells the ``compile`` harness has compiled in this process."""
+    return len(_COMPILED)
+
+
 def _compile_target(data: bytes, workdir: Path) -> None:
     import copy
+    import sys
 
     from workcell import compile_cell
     from workcell.cell import cell_from_dict
 
+    mutations = compile_mutations(data)
+    key = tuple((field, struct.pack("<d", value)) for field, value in mutations)
+    if key in _COMPILED:
+        return
     base, folder = _compile_base(workdir)
     cell_data = copy.deepcopy(base)
-    for field, value in compile_mutations(data):
+    for field, value in mutations:
         _set(cell_data, field, value)
     path = workdir / "compile.toml"
 
@@ -295,6 +331,9 @@ def _compile_target(data: bytes, workdir: Path) -> None:
         return compile_cell(cell)
 
     check(run, path)
+    _COMPILED.add(key)
+    if len(_COMPILED) % 50 == 0:
+        print(f"compile harness: {len(_COMPILED)} distinct cells", file=sys.stderr, flush=True)
 
 
 @dataclass(frozen=True, slots=True)
@@ -345,6 +384,62 @@ KNOWN_FOREIGN: dict[str, tuple[str, ...]] = {}
 fuzzed parsers, not fixed yet: the test does not run them (some exhaust the
 memory) and the fuzz harnesses leave such inputs out (:data:`PENDING_RANGES`).
 Empty an entry once the code it names refuses the input."""
+
+
+ALL = "all"
+"""The multiplexed target: every target in one process (the bounded run of the
+test suite). The first byte of an input picks the target (its index in
+:data:`ALL_ORDER`, modulo their number), the rest is that target's input."""
+
+ALL_ORDER: tuple[str, ...] = tuple(sorted(TARGETS))
+
+ALL_CAPS: dict[str, int] = {"compile": 40}
+"""Most inputs a target runs inside the multiplexed one (the compile harness
+compiles a cell per new input; the parsers take milliseconds)."""
+
+
+class Multiplex:
+    """Every target behind one input function (:data:`ALL`); counts per target.
+
+    Every ``report_every`` inputs (and at the cap of each target) the counts
+    are printed to stderr as ``multiplex counts: {json}``, so that the
+    driver can read them after libFuzzer has ended the process.
+    """
+
+    def __init__(self, report_every: int = 200) -> None:
+        self.counts: dict[str, int] = dict.fromkeys(ALL_ORDER, 0)
+        self.report_every = report_every
+        self._seen = 0
+
+    def __call__(self, data: bytes, workdir: Path) -> None:
+        name = ALL_ORDER[data[0] % len(ALL_ORDER)] if data else ALL_ORDER[0]
+        if self.counts[name] >= ALL_CAPS.get(name, 1 << 62):
+            return
+        self.counts[name] += 1
+        self._seen += 1
+        if self._seen % self.report_every == 0:
+            self.report()
+        TARGETS[name](data[1:], workdir)
+
+    def report(self) -> None:
+        import json
+        import sys
+
+        print(f"multiplex counts: {json.dumps(self.counts)}", file=sys.stderr, flush=True)
+
+
+def seed_inputs(name: str) -> list[tuple[str, bytes]]:
+    """The seed inputs of target ``name`` (or :data:`ALL`) as ``(label, bytes)``;
+    those of :data:`ALL` carry their target's index as the first byte."""
+    if name != ALL:
+        return [(f.name, f.read_bytes()) for f in seed_files(name)]
+    out = []
+    for i, target in enumerate(ALL_ORDER):
+        files = seed_files(target) or []
+        out += [(f"{target}_{f.name}", bytes([i]) + f.read_bytes()) for f in files]
+        if not files:
+            out.append((f"{target}_empty", bytes([i])))
+    return out
 
 
 def seed_files(name: str) -> list[Path]:

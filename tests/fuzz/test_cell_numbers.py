@@ -73,3 +73,23 @@ def test_compiling_a_cell_with_extreme_numbers_raises_only_our_errors(
     # an infeasible cell names the task and why each arm cannot do it
     with contextlib.suppress(InfeasibleError):
         compile_cell(cell)
+
+
+@pytest.mark.parametrize("size", [1e-300, 5e-324, 1e-12])
+def test_a_tiny_space_grid_is_refused_by_its_block_count(size: float) -> None:
+    """Finding of the property above (``compile.grid = 1e-300``): the block
+    indices overflowed int64 and the grid became one block with empty bounds,
+    an SDL error about ``<string>``. Now the count is taken in floats, and
+    the cell file refuses grids under 1 cm by their field."""
+    import numpy as np
+
+    from multiarm.errors import ValidationError
+    from workcell.geometry.reach import MAX_BLOCKS, shared_blocks
+
+    boxes = [np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]), np.array([[0.5, 0.5, 0.5], [2.0, 2, 2]])]
+    with pytest.raises(ValidationError, match=rf"more than {MAX_BLOCKS} blocks"):
+        shared_blocks(boxes, size)
+    assert shared_blocks(boxes, 0.25).n_zones == 27  # blocks 2..4 on each axis
+    data = with_edits(numeric_cell_data(), [(("compile", "grid"), size)])
+    with pytest.raises(MultiarmError, match=r"^c\.toml: compile\.grid: must be 0 \(off\) or in"):
+        cell_from_dict(data, filename="c.toml")

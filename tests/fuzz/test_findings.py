@@ -67,12 +67,36 @@ CASES = [
     ("sdl/wall-normal-overflow.sdl", load_sdl, SDLError, "too long to normalise"),
     ("cell/int-too-many-digits.toml", load_cell, FormatError, "too many digits"),
     ("cell/recursion-deep-array.toml", load_cell, FormatError, "nested too deeply"),
+    (
+        "cell/urdf-package-dotted-name.toml",
+        load_cell,
+        ValidationError,
+        "arms.ur_left.urdf: package 'examion.urdf' is not installed",
+    ),
     ("faults_json/int-too-many-digits.json", _faults, UsageError, "too many digits"),
     ("faults_json/recursion-deep-array.json", _faults, UsageError, "nested too deeply"),
     ("faults_json/kind-unhashable.json", _faults, UsageError, ".kind: unknown fault kind"),
     ("faults_toml/int-too-many-digits.toml", _faults, UsageError, "too many digits"),
     ("faults_toml/recursion-deep-array.toml", _faults, UsageError, "nested too deeply"),
     ("faults_toml/kind-unhashable.toml", _faults, UsageError, ".kind: unknown fault kind"),
+    (
+        "faults_json/message-loss-kinds-number.json",
+        _faults,
+        UsageError,
+        "MessageLoss.kinds must be a list of message kinds",
+    ),
+    (
+        "faults_toml/message-loss-kinds-number.toml",
+        _faults,
+        UsageError,
+        "faults[0] (message_loss): MessageLoss.kinds must be a list of message kinds, got 5.0",
+    ),
+    (
+        "faults_toml/activate-zones-number.toml",
+        _faults,
+        UsageError,
+        "faults[0] (activate_zones): ActivateZones.zones must be a list of zone names, got 3",
+    ),
 ]
 
 PADDING = {

@@ -1,7 +1,8 @@
 """The bounded fuzz run of the test suite, and the replay of every crash reproducer.
 
-Each target of :mod:`tests.fuzz.targets` runs under atheris for a few
-thousand inputs (the long campaign is ``make fuzz``); each file under
+Every target of :mod:`tests.fuzz.targets` runs under atheris in one process
+for a few thousand inputs in all (the long campaign is ``make fuzz``); each
+file under
 ``tests/fuzz/crashes/<target>/`` (an input that once escaped our error
 family, or hung) is replayed and must now load or raise an error of ours
 that names its place. The seeds themselves are replayed the same way.
@@ -14,12 +15,11 @@ from pathlib import Path
 
 import pytest
 
-from tests.fuzz.targets import HERE, KNOWN_FOREIGN, TARGETS, seed_files
+from tests.fuzz.targets import ALL, HERE, KNOWN_FOREIGN, TARGETS, seed_files
 
-# Inputs per target in the bounded run: the parsers run hundreds of inputs a
-# second; the compile harness compiles a cell per input.
-BOUNDED_RUNS = {"compile": 20}
-DEFAULT_RUNS = 300
+# Inputs of the bounded run, all targets in one process (the seeds of every
+# target first: about 120); the compile harness stops at ALL_CAPS["compile"].
+BOUNDED_RUNS = 2500
 
 CRASHES = HERE / "crashes"
 
@@ -66,11 +66,17 @@ def test_every_crash_folder_is_a_target() -> None:
             assert (CRASHES / target / name).is_file(), f"{target}/{name} is listed but missing"
 
 
-@pytest.mark.parametrize("target", sorted(TARGETS))
-def test_bounded_fuzz_run(target: str) -> None:
+def test_bounded_fuzz_run_of_every_target_in_one_process() -> None:
+    """One atheris process runs every target (:class:`tests.fuzz.targets.Multiplex`:
+    an input's first byte picks the target) from their seeds: one start-up and one
+    instrumentation instead of one per target."""
     pytest.importorskip("atheris", reason="atheris (dev extra) has wheels for Linux and macOS only")
     from tests.fuzz.campaign import fuzz_target
 
-    r = fuzz_target(target, runs=BOUNDED_RUNS.get(target, DEFAULT_RUNS), max_time=45, timeout=10)
-    assert r.status == "ok", f"{target}: {r.status}\n{r.log}"
-    assert r.inputs > 0, r.log
+    r = fuzz_target(ALL, runs=BOUNDED_RUNS, max_time=240, timeout=10)
+    assert r.status == "ok", f"{r.status}\n{r.log}"
+    assert r.inputs == BOUNDED_RUNS, r.log
+    assert r.per_target is not None, r.log
+    assert set(r.per_target) == set(TARGETS)
+    starved = [name for name, n in r.per_target.items() if n < 2]
+    assert not starved, (starved, r.per_target)

@@ -143,11 +143,15 @@ def _cell_file(tmp_path: Path, compile_table: str) -> Path:
 def test_the_cell_file_sets_the_grid(tmp_path: Path) -> None:
     assert load_cell(_cell_file(tmp_path, "grid = 0.45\n")).grid == 0.45
     assert load_cell(_cell_file(tmp_path, "grid = 0\n")).grid == 0.0
-    with pytest.raises(ValidationError, match=r"cell\.toml: compile\.grid: must be >= 0"):
-        load_cell(_cell_file(tmp_path, "grid = -0.3\n"))
+    for bad in ("-0.3", "1e-300", "0.001", "1e300"):
+        with pytest.raises(
+            ValidationError,
+            match=r"cell\.toml: compile\.grid: must be 0 \(off\) or in \[0\.01, 100\] metres",
+        ):
+            load_cell(_cell_file(tmp_path, f"grid = {bad}\n"))
     with pytest.raises(ValidationError, match=r"cell\.toml: compile\.grid: expected a number"):
         load_cell(_cell_file(tmp_path, 'grid = "fine"\n'))
-    with pytest.raises(ValidationError, match="grid must be a finite number"):
+    with pytest.raises(ValidationError, match=r"grid must be 0 \(off\) or .* \[0\.01, 100\]"):
         dataclasses.replace(load_example("supersigma"), grid=-1.0)
 
 

@@ -118,7 +118,10 @@ def _package_dir(name: str, where: str) -> Path:
         share = Path(str(dist.locate_file(f"cmeel.prefix/share/{name}")))
         if share.is_dir():
             return share
-    spec = importlib.util.find_spec(name.replace("-", "_"))
+    module = name.replace("-", "_")
+    # a top-level name only: finding "a.b" would import package "a" (and raise
+    # ModuleNotFoundError when it is missing)
+    spec = importlib.util.find_spec(module) if module.isidentifier() else None
     if spec is not None and spec.submodule_search_locations:
         return Path(next(iter(spec.submodule_search_locations)))
     hint = " (pip install 'multiarm[urdf]')" if name == "example-robot-data" else ""

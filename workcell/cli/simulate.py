@@ -82,7 +82,10 @@ def run(args: argparse.Namespace) -> int:
     common.check_sim(args)
     cell = load_cell_or_example(args.cell)
     try:
-        faults = load_faults(args.faults) if args.faults else None
+        # read and checked against the cell (names) now; run_cell reads the file
+        # again and checks the times against the compiled cell before the solve
+        if args.faults:
+            load_faults(args.faults, cell)
     except MultiarmError as exc:
         raise UsageError(f"--faults: {exc}") from None
     out = common.out_dir(args.out or str(Path("out") / cell.name))
@@ -94,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
             time_limit=args.time_limit,
             evaluations=args.evaluations,
             seed=args.seed,
-            faults=faults,
+            faults=args.faults,
             medium=args.network,
             options=options,
             out=out,

@@ -42,9 +42,20 @@ def _list(w: _Where, value: Any, where: str) -> list[Any]:
     return value
 
 
-def _int(w: _Where, value: Any, where: str, least: int = 0) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < least:
-        raise w.fail(where, f"expected an integer >= {least}, got {value!r}")
+MAX_INT = 2**62
+"""Largest integer field (seeds plus repetitions are stored as 64-bit integers)."""
+MAX_RUNS = 100_000
+"""Most runs one sweep file may hold (instances x solver seeds x repetitions):
+a bigger grid is a typo (``repetitions = 1e9``) or weeks of work; split it."""
+MAX_GENERATED = (1_000, 10_000, 1_000, 1_000)
+"""Largest arms, tasks, zones and tools of a generated instance."""
+
+
+def _int(w: _Where, value: Any, where: str, least: int = 0, most: int = MAX_INT) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not least <= value <= most:
+        above = isinstance(value, int) and not isinstance(value, bool) and value > most
+        bound = f">= {least}" + (f" and <= {most}" if most != MAX_INT or above else "")
+        raise w.fail(where, f"expected an integer {bound}, got {value!r}")
     return value
 
 
@@ -57,8 +68,8 @@ def _str(w: _Where, value: Any, where: str) -> str:
 def _number(w: _Where, value: Any, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise w.fail(where, f"expected a number, got {value!r}")
-    if not (math.isfinite(value) and value > 0):
-        raise w.fail(where, f"expected a finite number > 0, got {value!r}")
+    if not 1e-6 <= value <= 1e6:
+        raise w.fail(where, f"expected a number in [1e-06, 1e+06] (seconds), got {value!r}")
     return float(value)
 
 

@@ -42,6 +42,12 @@ Paths are relative to the sweep file::
     seeds = [0]                          # solver seeds; "instance" uses the problem's seed
     options = { workers = 2 }            # TreeOptions / GreedyOptions / CpSatOptions fields
 
+Sizes are capped before any run: at most
+:data:`~workcell.experiments._fields.MAX_RUNS` (100,000) runs in a sweep
+file, generated instances of at most 1,000 arms, 10,000 tasks, 1,000 zones
+and tools, time limits in 1e-6 .. 1e6 s, seeds below 2**62; a field over
+its cap is an error naming it (``s.toml: sweep.repetitions: ...``).
+
 ``[sweep] workers`` sets the local processes used when the caller names none
 (timed comparisons set 1). An optional ``[quick]`` table reduces the grid
 for a smoke run (:meth:`Sweep.quick_version`): ``instances`` (names or shell
@@ -93,6 +99,8 @@ from multiarm.text import parse_toml, read_source
 from scheduler import REGISTRY, SOLVERS, read_fjsp
 from workcell.cell import EXAMPLES, load_cell
 from workcell.experiments._fields import (
+    MAX_GENERATED,
+    MAX_RUNS,
     _int,
     _list,
     _number,
@@ -250,7 +258,7 @@ def sweep_from_dict(
     out = Path(_str(w, head.get("out", default_out), "sweep.out"))
     if not out.is_absolute():
         out = base / out
-    repetitions = _int(w, head.get("repetitions", 1), "sweep.repetitions", least=1)
+    repetitions = _int(w, head.get("repetitions", 1), "sweep.repetitions", least=1, most=MAX_RUNS)
     workers = _int(w, head["workers"], "sweep.workers", least=1) if "workers" in head else None
     if "instances" not in data:
         raise w.fail("instances", "missing: at least one [[instances]] table")
@@ -278,6 +286,15 @@ def sweep_from_dict(
             raise w.fail("solvers", f"label {cfg.label!r} is used twice: give each a unique label")
         labels.add((cfg.label, cfg.time_limit))
     quick = _quick(w, data.get("quick", {}), instances, solvers)
+    per_rep = sum(
+        1 if inst.kind == "benchmark" else sum(len(c.seeds) for c in solvers) for inst in instances
+    )
+    if per_rep * repetitions > MAX_RUNS:
+        raise w.fail(
+            "sweep.repetitions",
+            f"{per_rep} runs x {repetitions} repetitions make {per_rep * repetitions} runs, "
+            f"more than {MAX_RUNS}: split the sweep",
+        )
     return Sweep(
         name,
         description,
@@ -323,7 +340,7 @@ def _quick(
     if "time_limit" in q:
         out["time_limit"] = _number(w, q["time_limit"], "quick.time_limit")
     if "repetitions" in q:
-        out["repetitions"] = _int(w, q["repetitions"], "quick.repetitions", least=1)
+        out["repetitions"] = _int(w, q["repetitions"], "quick.repetitions", least=1, most=MAX_RUNS)
     if "params" in q:
         params = _table(w, q["params"], "quick.params")
         have = {k for i in instances if i.kind == "benchmark" for k, _ in i.params}
@@ -404,7 +421,8 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
             if not isinstance(size, list) or len(size) != 4:
                 raise w.fail(sw, f"expected [arms, tasks, zones, tools], got {size!r}")
             arms, tasks, zones, tools = (
-                _int(w, v, f"{sw}[{k}]", least=1 if k < 2 else 0) for k, v in enumerate(size)
+                _int(w, v, f"{sw}[{k}]", least=1 if k < 2 else 0, most=MAX_GENERATED[k])
+                for k, v in enumerate(size)
             )
             for s in seeds:
                 label = f"{arms}x{tasks}x{zones}x{tools}"
@@ -468,12 +486,19 @@ def _campaign(
         if c not in EXAMPLES:
             _readable(w, f"{where}.cells[{j}]", p, load_cell)
         cells.append(c if c in EXAMPLES else fspath(p.resolve()))
-    episodes = _int(w, item.get("episodes"), f"{where}.episodes", least=1)
+    episodes = _int(w, item.get("episodes"), f"{where}.episodes", least=1, most=MAX_RUNS * 1000)
     batch = _int(w, item.get("batch", CAMPAIGN_BATCH), f"{where}.batch", least=1)
     seeds = [
         _int(w, s, f"{where}.seeds[{j}]")
         for j, s in enumerate(_list(w, item.get("seeds", [0]), f"{where}.seeds"))
     ]
+    runs = len(cells) * len(seeds) * -(-episodes // batch)
+    if runs > MAX_RUNS:
+        raise w.fail(
+            f"{where}.episodes",
+            f"{len(cells)} cells x {len(seeds)} seeds x {episodes} episodes in batches of "
+            f"{batch} make {runs} runs, more than {MAX_RUNS} (raise batch or split the sweep)",
+        )
     return campaign_instances(cells, episodes, seeds, batch, family)
 
 

@@ -185,13 +185,14 @@ def shared_blocks(boxes: Sequence[FloatArray], size: float) -> ZoneMap:
             hi = np.minimum(bs[i][1], bs[j][1])
             if np.any(hi < lo):
                 continue
-            k0 = np.floor(lo / size).astype(np.int64)
-            k1 = np.floor(hi / size).astype(np.int64)
-            count = int(np.prod(k1 - k0 + 1))
-            if len(keys) + count > MAX_BLOCKS:
+            with np.errstate(over="ignore", invalid="ignore"):  # in floats: no int64 overflow
+                f0, f1 = np.floor(lo / size), np.floor(hi / size)
+                span = float(np.prod(f1 - f0 + 1))
+            if not len(keys) + span <= MAX_BLOCKS:
                 raise ValidationError(
                     f"space grid: more than {MAX_BLOCKS} blocks of {size} m; use larger blocks"
                 )
+            k0, k1 = f0.astype(np.int64), f1.astype(np.int64)
             for x in range(int(k0[0]), int(k1[0]) + 1):
                 for y in range(int(k0[1]), int(k1[1]) + 1):
                     for z in range(int(k0[2]), int(k1[2]) + 1):

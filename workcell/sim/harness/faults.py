@@ -63,13 +63,28 @@ __all__ = [
 ]
 
 
+MAX_SECONDS = 1e6
+"""Largest time or duration of a fault record, seconds (11.6 days; ``inf``
+where a record allows it). Physical ranges: :data:`MAX_FORCE`,
+:data:`MAX_LOSS`."""
+MAX_FORCE = 1e6
+"""Largest crash force, newtons."""
+MAX_LOSS = 0.999
+"""Largest message-loss probability. A work cap, not a physical one: each
+frame is sent ``1 / (1 - p)`` times on average, and the run's events grow
+with it (the supersigma cell's greedy plan: 0.4 s lossless, 2.1 s at 0.9,
+14.5 s at 0.99; at 0.999 a run takes minutes, at 0.99999 hours). A link that
+loses more is down: model it as an :class:`ArmFailure`."""
+
+
 def _time(value: object, what: str, *, allow_inf: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ValidationError(f"{what} must be a number, got {value!r}")
     v = float(value)
-    if math.isnan(v) or v < 0 or (math.isinf(v) and not allow_inf):
+    if math.isnan(v) or (not 0 <= v <= MAX_SECONDS and not (allow_inf and v == math.inf)):
         raise ValidationError(
-            f"{what} must be {'>= 0' if allow_inf else 'finite and >= 0'} seconds, got {value!r}"
+            f"{what} must be in [0, {MAX_SECONDS:g}] seconds{' or inf' if allow_inf else ''}, "
+            f"got {value!r}"
         )
     return v
 
@@ -113,8 +128,8 @@ class Crash:
         object.__setattr__(self, "at", _time(self.at, "Crash.at"))
         object.__setattr__(self, "recovery", _time(self.recovery, "Crash.recovery"))
         f = self.force
-        if isinstance(f, bool) or not isinstance(f, int | float) or not 0 <= f < math.inf:
-            raise ValidationError(f"Crash.force must be a number >= 0 (newtons), got {f!r}")
+        if isinstance(f, bool) or not isinstance(f, int | float) or not 0 <= f <= MAX_FORCE:
+            raise ValidationError(f"Crash.force must be in [0, {MAX_FORCE:g}] newtons, got {f!r}")
         object.__setattr__(self, "force", float(f))
 
 
@@ -133,8 +148,9 @@ class LostSync:
         if isinstance(self.axis, bool) or not isinstance(self.axis, int) or self.axis < 0:
             raise ValidationError(f"LostSync.axis must be an integer >= 0, got {self.axis!r}")
         object.__setattr__(self, "at", _time(self.at, "LostSync.at"))
-        if isinstance(self.steps, bool) or not isinstance(self.steps, int) or self.steps < 1:
-            raise ValidationError(f"LostSync.steps must be an integer >= 1, got {self.steps!r}")
+        s = self.steps
+        if isinstance(s, bool) or not isinstance(s, int) or not 1 <= s <= 10**6:
+            raise ValidationError(f"LostSync.steps must be an integer in [1, 1e6], got {s!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -149,19 +165,27 @@ class MessageLoss:
 
     def __post_init__(self) -> None:
         p = self.probability
-        if isinstance(p, bool) or not isinstance(p, int | float) or not (0.0 <= float(p) < 1.0):
-            raise ValidationError(f"MessageLoss.probability must be in [0, 1), got {p!r}")
+        if isinstance(p, bool) or not isinstance(p, int | float) or not 0.0 <= p <= MAX_LOSS:
+            raise ValidationError(
+                f"MessageLoss.probability must be in [0, {MAX_LOSS:g}] (each frame is sent "
+                f"1 / (1 - p) times on average; a dead link is an arm_failure), got {p!r}"
+            )
         object.__setattr__(self, "probability", float(p))
         if self.kinds is not None:
             kinds: object = self.kinds
-            if isinstance(kinds, str) or not all(isinstance(k, str) and k for k in self.kinds):
+            if not isinstance(kinds, tuple | list) or not all(
+                isinstance(k, str) and k for k in kinds
+            ):
                 raise ValidationError(
                     f"MessageLoss.kinds must be a list of message kinds, got {self.kinds!r}"
                 )
             object.__setattr__(self, "kinds", tuple(self.kinds))
         t = _time(self.timeout, "MessageLoss.timeout")
-        if t <= 0:
-            raise ValidationError(f"MessageLoss.timeout must be > 0 seconds, got {self.timeout!r}")
+        if t < 1e-6:
+            raise ValidationError(
+                f"MessageLoss.timeout must be in [1e-06, {MAX_SECONDS:g}] seconds, "
+                f"got {self.timeout!r}"
+            )
         object.__setattr__(self, "timeout", t)
 
 
@@ -204,9 +228,8 @@ class ActivateZones:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "at", _time(self.at, "ActivateZones.at"))
-        if isinstance(self.zones, str) or not all(  # type: ignore[unreachable]
-            isinstance(z, str) and z for z in self.zones
-        ):
+        zones: object = self.zones
+        if not isinstance(zones, tuple | list) or not all(isinstance(z, str) and z for z in zones):
             raise ValidationError(
                 f"ActivateZones.zones must be a list of zone names, got {self.zones!r}"
             )

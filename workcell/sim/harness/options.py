@@ -10,12 +10,11 @@ False
 >>> SimOptions(tick=0.0)
 Traceback (most recent call last):
 ...
-multiarm.errors.UsageError: SimOptions.tick must be None or a period > 0 seconds, got 0.0
+multiarm.errors.UsageError: SimOptions.tick must be None or a period in [1e-05, 0.1] seconds, got 0.0
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -23,7 +22,7 @@ from types import MappingProxyType
 from multiarm.errors import UsageError
 from workcell.sim.control.force import FREE_THRESHOLD, HOLE_SIGMA, check_insertion
 
-__all__ = ["CONTROL_TIME", "COORDINATION_POLICIES", "SimOptions"]
+__all__ = ["CONTROL_TIME", "COORDINATION_POLICIES", "RANGES", "SimOptions"]
 
 CONTROL_TIME = 1.25e-4
 """Seconds of one CPU's time to control one arm for one sampling period
@@ -34,13 +33,21 @@ COORDINATION_POLICIES: tuple[str, ...] = ("centralized",)
 centralized coordinator)."""
 
 
+RANGES: dict[str, tuple[float, float]] = {
+    "resolve_budget": (1e-6, 1e6),
+    "tick": (1e-5, 0.1),
+    "monitor_period": (1e-4, 1.0),
+    "control_time": (1e-7, 0.1),
+}
+"""Physical range, seconds, of each numeric field: a controller samples every
+10 us to 100 ms (S2.2: 1 ms), the monitor at least once a second and at most
+every 0.1 ms (finer samples cost time without finding more)."""
+
+
 def _positive(name: str, value: object, unit: str) -> float:
-    if (
-        isinstance(value, bool)
-        or not isinstance(value, int | float)
-        or not (value > 0 and math.isfinite(value))
-    ):
-        raise UsageError(f"SimOptions.{name} must be a number > 0 ({unit}), got {value!r}")
+    lo, hi = RANGES[name]
+    if isinstance(value, bool) or not isinstance(value, int | float) or not lo <= value <= hi:
+        raise UsageError(f"SimOptions.{name} must be in [{lo:g}, {hi:g}] {unit}, got {value!r}")
     return float(value)
 
 
@@ -147,13 +154,11 @@ class SimOptions:
             )
         tick = self.tick
         if tick is not None:
-            if (
-                isinstance(tick, bool)
-                or not isinstance(tick, int | float)
-                or not (tick > 0 and math.isfinite(tick))
-            ):
+            lo, hi = RANGES["tick"]
+            if isinstance(tick, bool) or not isinstance(tick, int | float) or not lo <= tick <= hi:
                 raise UsageError(
-                    f"SimOptions.tick must be None or a period > 0 seconds, got {tick!r}"
+                    f"SimOptions.tick must be None or a period in [{lo:g}, {hi:g}] seconds, "
+                    f"got {tick!r}"
                 )
             object.__setattr__(self, "tick", float(tick))
         try:
@@ -161,10 +166,12 @@ class SimOptions:
         except UsageError as exc:
             raise UsageError(str(exc).replace("simulate: ", "SimOptions.", 1)) from None
         ft = self.force_threshold
+        values = list(ft.values()) if isinstance(ft, Mapping) else [ft]
+        for v in values:
+            if isinstance(v, bool) or not isinstance(v, int | float) or not 1e-6 <= v <= 1e6:
+                raise UsageError(
+                    "SimOptions.force_threshold must be a number in [1e-06, 1e+06] newtons or a "
+                    f"mapping arm name -> newtons, got {ft!r}"
+                )
         if isinstance(ft, Mapping):
             object.__setattr__(self, "force_threshold", MappingProxyType(dict(ft)))
-        elif isinstance(ft, bool) or not isinstance(ft, int | float):
-            raise UsageError(
-                "SimOptions.force_threshold must be a number > 0 (newtons) or a mapping "
-                f"arm name -> newtons, got {ft!r}"
-            )
