@@ -11,8 +11,8 @@ from scheduler.generate import MAX_TASKS, random_problem
 from tasklib.examples import MAX_TASKS as MAX_TASKSET
 from tasklib.examples import generate_taskset
 from workcell.sim import MessageLoss, SimOptions
-from workcell.sim.faults import MAX_LOSS
-from workcell.sim.options import RANGES
+from workcell.sim.harness.faults import MAX_LOSS
+from workcell.sim.harness.options import RANGES
 
 
 @pytest.mark.parametrize(
