@@ -127,7 +127,7 @@ def test_the_simulation_executes_the_detour_and_the_monitor_stays_clean(
     assert m.detours >= 1
     summary = m.summary()
     assert summary["done_tasks"] == compiled.problem.n_tasks and summary["failed_tasks"] == 0
-    assert result.monitor is not None and result.monitor.samples > 0
+    assert result.safety is not None and result.safety.samples > 0
     # the detour is S2.12's alternative trajectory for deliver1, not a back-off
     (event,) = [e for e in result.trace.of_kind("detour")]
     assert event.arm == "sa" and event.task == "deliver1"

@@ -116,7 +116,7 @@ def test_the_arm_follows_the_planned_path_and_the_task_completes(run: dict[str, 
 def test_the_safety_monitor_watched_the_detour_and_stayed_quiet(run: dict[str, Any]) -> None:
     r = run["result"]
     assert not [e for e in r.trace if e.kind == "monitor"]
-    assert r.monitor is not None and r.monitor.samples > 0
+    assert r.safety is not None and r.safety.samples > 0
     se = next(c for c in r.arm_logs if c.name == "se")
     detour = next(rec for rec in se.records if rec.leg is not None and rec.leg.kind == "detour")
     assert detour.end - detour.start > 2 * 0.02  # several samples while the detour ran

@@ -127,8 +127,10 @@ def test_nominal_runs_pass_and_the_monitor_does_not_change_them(name: str) -> No
     plan = _greedy(cc)
     on = simulate(cc, plan, seed=0)  # live monitor, the default
     off = simulate(cc, plan, seed=0, options=SimOptions(monitor=False))
-    assert on.monitor is not None and off.monitor is None
-    assert on.monitor.samples > 0
+    assert on.safety is not None and off.safety is None
+    assert on.safety.samples > 0
+    with pytest.warns(DeprecationWarning, match="SimResult.safety"):  # the old name, one release
+        assert on.monitor is on.safety
     assert not [e for e in on.trace if e.kind == "monitor"]
     assert set(on.tasks_frame()["status"]) == {"done"}
     # the monitor only reads: the same run, event for event
@@ -155,7 +157,7 @@ def test_idle_stretches_cost_no_samples(supersigma: Any) -> None:
     20 ms of the stop."""
     plan = _greedy(supersigma)
     r = simulate(supersigma, plan, seed=0, faults=[EmergencyStop(20.0, 200.0)])
-    mon = r.monitor
+    mon = r.safety
     assert mon is not None
     t_end = max(rec.end for c in r.arm_logs for rec in c.records)
     grid = math.ceil(t_end / PERIOD) + 1
@@ -198,7 +200,7 @@ def test_the_capsule_pre_test_never_overestimates_a_distance() -> None:
 def test_monitor_values(supersigma: Any) -> None:
     plan = _greedy(supersigma)
     post = simulate(supersigma, plan, seed=0, options=SimOptions(monitor="post"))
-    assert post.monitor is None and set(post.tasks_frame()["status"]) == {"done"}
+    assert post.safety is None and set(post.tasks_frame()["status"]) == {"done"}
     with pytest.raises(UsageError, match="monitor must be True, False, 'live' or 'post'"):
         simulate(supersigma, plan, options=SimOptions(monitor="sometimes"))
 

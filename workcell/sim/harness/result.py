@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from os import PathLike
@@ -46,8 +47,11 @@ class SimResult:
     seed : int
     trace : Trace
     metrics : Metrics
-    monitor : LiveMonitor or None
-        The live safety monitor of the run (its counters), None when off.
+    safety : LiveMonitor or None
+        The live safety monitor of the run (its counters: samples, wakes, FCL
+        checks), None when ``SimOptions(monitor=False)``. ``monitor`` is the
+        option's word; the result's was ``monitor`` too and still reads, with
+        a DeprecationWarning, for one release.
     arm_logs : tuple of MotionLog
         Each arm's published motion and task records
         (:class:`~workcell.sim.protocol.records.MotionLog`), in arm order.
@@ -62,11 +66,22 @@ class SimResult:
     seed: int
     trace: Trace
     metrics: Metrics
-    monitor: LiveMonitor | None = None
+    safety: LiveMonitor | None = None
     _tasks: tuple[dict[str, Any], ...] = ()
     _reservations: tuple[dict[str, Any], ...] = ()
     arm_logs: tuple[MotionLog, ...] = ()
     compiled: CompiledCell | None = None
+
+    @property
+    def monitor(self) -> LiveMonitor | None:
+        """Deprecated name of :attr:`safety` (``monitor`` is the option's word)."""
+        warnings.warn(
+            "SimResult.monitor is deprecated: read SimResult.safety "
+            "(SimOptions.monitor is the switch, SimResult.safety the live monitor's counters)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.safety
 
     def to_html(self, path: str | PathLike[str], **options: Any) -> Path:
         """Write the 3D replay of this run as one self-contained HTML file.
