@@ -45,6 +45,7 @@ import bisect
 import itertools
 import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -55,6 +56,7 @@ from scheduler.schedule import Schedule, ScheduleError, validate
 from scheduler.start import begin
 
 __all__ = [
+    "add_arm_sequences",
     "build_model",
     "essential_resources",
     "integer_scale",
@@ -348,27 +350,7 @@ def build_model(
         for q in p.task_preds[t]:
             mdl.add(S[t] >= E[q])
     # arms
-    for a in range(p.n_arms):
-        modes = [int(m) for m in np.flatnonzero(p.mode_arm == a)]
-        if not modes:
-            continue
-        mdl.add_no_overlap([mode_iv[m] for m in modes])  # redundant with setups
-        if not p._setup.zero:
-            arcs = []
-            for i, m in enumerate(modes, start=1):
-                t = int(p.mode_task[m])
-                arcs.append((0, i, mdl.new_bool_var("")))
-                arcs.append((i, 0, mdl.new_bool_var("")))
-                arcs.append((i, i, ~X[m]))
-                for j, m2 in enumerate(modes, start=1):
-                    if m2 == m:
-                        continue
-                    t2 = int(p.mode_task[m2])
-                    lit = mdl.new_bool_var("")
-                    arcs.append((i, j, lit))
-                    mdl.add(S[t2] >= E[t] + hi(p.setup_time(a, t, t2))).only_enforce_if(lit)
-            arcs.append((0, 0, mdl.new_bool_var("")))
-            mdl.add_circuit(arcs)
+    add_arm_sequences(mdl, p, mode_iv, X, S, E, hi)
     # arms standing in exclusive start zones until they leave
     for a in range(p.n_arms):
         zs = [z for z in p.arm_start_zones[a] if p.zone_exclusive[z] and z in shared]
@@ -594,3 +576,44 @@ def solve_cpsat(
     if optimal:
         bound = mk
     return Result(status, sched, mk, min(bound, mk), runtime, "cpsat", seed, stats)
+
+
+def add_arm_sequences(
+    mdl: Any,
+    p: Problem,
+    intervals: dict[int, Any],
+    X: dict[int, Any] | Any,
+    S: Any,
+    E: Any,
+    to_units: Callable[[float], int],
+) -> None:
+    """Each arm does one mode at a time, with its setups (travel) between them.
+
+    A no-overlap of the arm's mode ``intervals``, and, when the problem has
+    setups, a circuit over the arm's modes whose arcs enforce
+    ``S[t2] >= E[t] + setup(a, t, t2)`` (``to_units`` rounds the setup into
+    model units: outward for a bound-safe model, inward for a relaxation).
+    Shared by the CP-SAT model and the overlap relaxation.
+    """
+    for a in range(p.n_arms):
+        modes = [int(m) for m in np.flatnonzero(p.mode_arm == a)]
+        if not modes:
+            continue
+        mdl.add_no_overlap([intervals[m] for m in modes])  # redundant with setups
+        if p._setup.zero:
+            continue
+        arcs = []
+        for i, m in enumerate(modes, start=1):
+            t = int(p.mode_task[m])
+            arcs.append((0, i, mdl.new_bool_var("")))
+            arcs.append((i, 0, mdl.new_bool_var("")))
+            arcs.append((i, i, ~X[m]))
+            for j, m2 in enumerate(modes, start=1):
+                if m2 == m:
+                    continue
+                t2 = int(p.mode_task[m2])
+                lit = mdl.new_bool_var("")
+                arcs.append((i, j, lit))
+                mdl.add(S[t2] >= E[t] + to_units(p.setup_time(a, t, t2))).only_enforce_if(lit)
+        arcs.append((0, 0, mdl.new_bool_var("")))
+        mdl.add_circuit(arcs)

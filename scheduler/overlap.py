@@ -63,7 +63,7 @@ from typing import Any
 import numpy as np
 
 from multiarm.types import FloatArray
-from scheduler.cpsat import essential_resources, resource_windows
+from scheduler.cpsat import add_arm_sequences, essential_resources, resource_windows
 from scheduler.kernel._jit import njit
 from scheduler.problem import Problem
 
@@ -359,27 +359,7 @@ def overlap_model(
         mdl.add_exactly_one(lits)
         for q in p.task_preds[t]:
             mdl.add(S[t] >= E[q])
-    for a in range(p.n_arms):
-        modes = [int(m) for m in np.flatnonzero(p.mode_arm == a)]
-        if not modes:
-            continue
-        mdl.add_no_overlap([iv[m] for m in modes])
-        if not p._setup.zero:
-            arcs = []
-            for i, m in enumerate(modes, start=1):
-                t = int(p.mode_task[m])
-                arcs.append((0, i, mdl.new_bool_var("")))
-                arcs.append((i, 0, mdl.new_bool_var("")))
-                arcs.append((i, i, ~X[m]))
-                for j, m2 in enumerate(modes, start=1):
-                    if m2 == m:
-                        continue
-                    t2 = int(p.mode_task[m2])
-                    lit = mdl.new_bool_var("")
-                    arcs.append((i, j, lit))
-                    mdl.add(S[t2] >= E[t] + fl(p.setup_time(a, t, t2))).only_enforce_if(lit)
-            arcs.append((0, 0, mdl.new_bool_var("")))
-            mdl.add_circuit(arcs)
+    add_arm_sequences(mdl, p, iv, X, S, E, fl)
     # tools are held from start to end, waits included: a no-overlap each
     tools: dict[int, list[Any]] = {}
     for m in range(p.n_modes):
