@@ -121,3 +121,18 @@ def test_one_exception_root() -> None:
     for name in e.__all__:
         cls = getattr(e, name)
         assert issubclass(cls, e.MultiarmError), name
+
+
+@pytest.mark.parametrize(
+    ("folder", "most"),
+    [("workcell/cli", 250), ("workcell/experiments", 600)],
+)
+def test_the_face_and_the_studies_stay_small(folder: str, most: int) -> None:
+    """Issue 20: each command module is arguments, one call and printing
+    (<= 250 lines); no module of the experiments is over 600 lines."""
+    over = {
+        str(p.relative_to(ROOT)): n
+        for p in sorted((ROOT / folder).rglob("*.py"))
+        if (n := len(p.read_text().splitlines())) > most
+    }
+    assert not over, over

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from os import fspath
+from pathlib import Path
 from typing import Any
 
-from multiarm.errors import ValidationError
+from multiarm.errors import MultiarmError, ValidationError
 
 
 class _Where:
@@ -80,3 +82,18 @@ def _param(w: _Where, value: Any, where: str) -> Any:
     if isinstance(value, bool | int | str) or (isinstance(value, float) and math.isfinite(value)):
         return value
     raise w.fail(where, f"expected a number, string, boolean or list of them, got {value!r}")
+
+
+def _readable(w: _Where, field: str, path: Path, read: Any) -> None:
+    """Read an instance file once now, so that a broken one stops the sweep before any run.
+
+    The error names the sweep file, the field and the instance file's own
+    error (which carries the instance file and, for syntax, ``line:col``).
+    """
+    try:
+        read(path)
+    except MultiarmError as exc:
+        shown = str(exc)
+        if fspath(path) not in shown and path.name not in shown:
+            shown = f"{fspath(path)}: {shown}"
+        raise w.fail(field, f"instance file is broken: {shown}") from None

@@ -105,6 +105,7 @@ from workcell.experiments._fields import (
     _list,
     _number,
     _param,
+    _readable,
     _str,
     _table,
     _unknown,
@@ -151,21 +152,6 @@ _GENERATOR_KEYS = {
 }
 _SOLVER_KEYS = {"label", "solver", "time_limit", "seeds", "options"}
 _FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
-
-
-def _readable(w: _Where, field: str, path: Path, read: Any) -> None:
-    """Read an instance file once now, so that a broken one stops the sweep before any run.
-
-    The error names the sweep file, the field and the instance file's own
-    error (which carries the instance file and, for syntax, ``line:col``).
-    """
-    try:
-        read(path)
-    except MultiarmError as exc:
-        shown = str(exc)
-        if fspath(path) not in shown and path.name not in shown:
-            shown = f"{fspath(path)}: {shown}"
-        raise w.fail(field, f"instance file is broken: {shown}") from None
 
 
 # ------------------------------------------------------------------ parsing
