@@ -148,7 +148,7 @@ def test_other_detour_seeds_tell_the_same_story(compiled: CompiledCell, seed: in
     strict=True,
     reason="With the space grid on, the simulated coordinator does not execute the "
     "planned detour: it plans its alternative trajectory from the arm's current "
-    "station to the next one (workcell/sim/coordinator.py, Coordinator._detour), and "
+    "station to the next one (workcell/sim/coordination/geometric.py, try_detour), and "
     "the grid puts a station (a block border) inside the stretch of the swing that "
     "touches the parked arm, so plan_detour answers 'goal_in_collision' and the arm "
     "waits for the parked arm to leave instead. The oracle plans from the knot before "
