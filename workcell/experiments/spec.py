@@ -97,6 +97,7 @@ from typing import Any
 from multiarm.errors import FormatError, MultiarmError, UsageError
 from multiarm.text import parse_toml, read_source
 from scheduler import REGISTRY, SOLVERS, read_fjsp
+from scheduler.generate import GENERATORS
 from workcell.cell import EXAMPLES, load_cell
 from workcell.experiments._fields import (
     MAX_GENERATED,
@@ -149,6 +150,9 @@ _GENERATOR_KEYS = {
     "start_zones": bool,
     "blocking": bool,
     "grid": int,
+    "generator": str,
+    "setup_fraction": float,
+    "flexibility": float,
 }
 _SOLVER_KEYS = {"label", "solver", "time_limit", "seeds", "options"}
 _FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
@@ -391,7 +395,14 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
             if key in item:
                 v = item[key]
                 ok = isinstance(v, bool) if typ is bool else not isinstance(v, bool)
-                if typ is float:
+                if typ is str:
+                    ok = v in GENERATORS
+                    if not ok:
+                        raise w.fail(
+                            f"{where}.{key}",
+                            f"expected one of {', '.join(map(repr, GENERATORS))}, got {v!r}",
+                        )
+                elif typ is float:
                     ok = ok and isinstance(v, int | float) and math.isfinite(v) and v >= 0
                 elif typ is int:
                     ok = ok and isinstance(v, int) and v >= 1
