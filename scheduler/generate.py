@@ -19,9 +19,10 @@ True
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -490,7 +491,7 @@ def random_line_problem(
                     continue
                 if leave <= enter:
                     continue
-                kind = "move" if shared else "occupy"
+                kind: Literal["occupy", "move"] = "move" if shared else "occupy"
                 wins.append(Window(f"z{z}", enter, leave, kind))
                 if not stay:
                     wins.append(Window(f"z{z}", dur - leave, dur - enter, kind))
@@ -571,4 +572,16 @@ def generate_problem(
         raise ValidationError(
             f"unknown generator {generator!r}: expected one of {', '.join(map(repr, GENERATORS))}"
         )
+    target = random_setup_fjsp if fn is _setup_fjsp else fn
+    known = {
+        k
+        for k, v in inspect.signature(target).parameters.items()
+        if v.kind is inspect.Parameter.KEYWORD_ONLY
+    }
+    for k in params:
+        if k not in known:
+            raise ValidationError(
+                f"generator {generator!r} has no parameter {k!r} (it takes: "
+                f"{', '.join(sorted(known))})"
+            )
     return fn(n_arms, n_tasks, n_zones, n_tools, seed, **params)

@@ -20,6 +20,8 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_kernel",
         "bench_fjsp",
         "bench_generated",
+        "bench_setups",
+        "bench_lines",
         "bench_scale",
         "bench_resolve",
         "bench_geometry",

@@ -143,3 +143,32 @@ def test_graph_search_with_setups_improves_and_validates() -> None:
     assert validate(p, ev.schedule(best)) == best.makespan
     again = graph_tabu(Evaluator(p), sol, np.inf, np.random.default_rng(0), max_evaluations=1500)
     assert again.makespan == best.makespan
+
+
+def test_generator_parameters_are_checked_by_name() -> None:
+    with pytest.raises(ValidationError, match="'line' has no parameter 'precedence'"):
+        generate_problem("line", 2, 6, 1, 0, precedence=0.2)
+    p = generate_problem("line", 3, 9, 2, 1, seed=2, stay_fraction=1.0)
+    assert (p.n_arms, p.n_tasks, p.n_zones, p.n_tools) == (3, 9, 2, 1)
+
+
+@given(
+    st.integers(0, 10_000),
+    st.integers(1, 5),
+    st.integers(1, 14),
+    st.integers(0, 4),
+    st.integers(0, 2),
+    st.sampled_from([0.0, 0.5, 1.0]),
+)
+@settings(max_examples=30, deadline=None)
+def test_line_problems_build_solve_and_repeat(
+    seed: int, arms: int, tasks: int, zones: int, tools: int, stay: float
+) -> None:
+    p = generate_problem("line", arms, tasks, zones, tools, seed=seed, stay_fraction=stay)
+    assert (p.n_arms, p.n_tasks, p.n_zones, p.n_tools) == (arms, tasks, zones, tools)
+    assert np.array_equal(p.mode_duration, np.round(p.mode_duration))
+    assert p._setup.is_metric()
+    again = generate_problem("line", arms, tasks, zones, tools, seed=seed, stay_fraction=stay)
+    assert again.to_dict() == p.to_dict()
+    r = solve(p, "greedy", seed=0)
+    assert validate(p, r.schedule) == r.objective

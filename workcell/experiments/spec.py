@@ -153,6 +153,9 @@ _GENERATOR_KEYS = {
     "generator": str,
     "setup_fraction": float,
     "flexibility": float,
+    "stay_fraction": float,
+    "shared_fraction": float,
+    "reach": int,
 }
 _SOLVER_KEYS = {"label", "solver", "time_limit", "seeds", "options"}
 _FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
