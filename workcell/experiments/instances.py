@@ -53,6 +53,7 @@ def build_problem(instance: InstanceSpec) -> Problem:
         return read_fjsp(path if path.is_absolute() else Path(instance.base_dir) / path)
     if instance.kind == "generated":
         p = dict(instance.params)
+        p.pop("waits", None)  # how the problem is solved (see runner), not made
         return generate_problem(
             p.pop("generator", "zones"),
             p.pop("arms"),

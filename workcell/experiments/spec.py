@@ -156,6 +156,7 @@ _GENERATOR_KEYS = {
     "stay_fraction": float,
     "shared_fraction": float,
     "reach": int,
+    "waits": bool,
 }
 _SOLVER_KEYS = {"label", "solver", "time_limit", "seeds", "options"}
 _FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
@@ -426,6 +427,8 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
             )
             for s in seeds:
                 label = f"{arms}x{tasks}x{zones}x{tools}"
+                if params.get("waits") is False:  # solved without waits at zone borders
+                    label += "-nowait"
                 name = f"{label}-s{s}"
                 allp = {"arms": arms, "tasks": tasks, "zones": zones, "tools": tools, **params}
                 out.append(

@@ -177,8 +177,9 @@ def generated_table(
         refmk = float(r["makespan"])
         rows.append(
             {
-                "size": f"{params['arms']}x{params['tasks']}x{params['zones']}x{params['tools']}",
-                "order": (params["tasks"], params["arms"]),
+                "size": f"{params['arms']}x{params['tasks']}x{params['zones']}x{params['tools']}"
+                + (" no waits" if params.get("waits") is False else ""),
+                "order": (params["tasks"], params["arms"], params.get("waits") is False),
                 "seed": int(r["instance_seed"]),
                 "opt": opt,
                 "target": target,
@@ -197,7 +198,7 @@ def generated_table(
         f"tree, cpsat (short) and greedy: {tl[tree]:g} s; reference CP-SAT: {tl[reference_label]:g} s "
         f"(sweep `benchmarks/sweeps/{sweep}.toml`); size = arms x tasks x zones x tools. Target = "
         "the reference's optimum when proven, else its best bound (then gaps are upper bounds on "
-        "the true gaps).",
+        "the true gaps). 'no waits': every solver solved it with `waits=False`.",
         "",
         "| size | seed | optimal? | target | reference | tree | cpsat short | greedy | tree gap | "
         "cpsat short gap | tree vs reference |",
