@@ -24,9 +24,10 @@ task back to an arm it just left — unless that move beats the best schedule
 so far (aspiration), even when it is worse than the current one. After a run
 without improvement it restarts from the best schedule with a random kick.
 
-On a pure FJSP (:func:`pure_fjsp`: no zone windows, start zones, tools,
-setup times or blocking oracle, and not a re-solve) the decoded schedule is
-the longest-path schedule of the disjunctive graph, and :func:`graph_tabu`
+On a pure FJSP (:func:`pure_fjsp`: no zone windows, start zones, tools or
+blocking oracle, setup times only where they obey the triangle inequality
+(:func:`graph_setup`), and not a re-solve) the decoded schedule is the
+longest-path schedule of the disjunctive graph (setups on its arm arcs), and :func:`graph_tabu`
 runs instead: a compiled search (:mod:`scheduler.kernel._tabu_jit`) with the
 k-insertion neighbourhood of Mastrolilli and Gambardella, each move's
 makespan computed exactly, rotating through the tabu settings of

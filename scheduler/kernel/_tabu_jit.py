@@ -1,4 +1,11 @@
-"""Compiled tabu search on the disjunctive graph of a pure FJSP (no zones, tools, setups).
+"""Compiled tabu search on the disjunctive graph of a pure FJSP (no zones or tools).
+
+Setup times, where given (``GraphArrays.stp``), lie on the arcs between
+consecutive tasks of an arm and from an arm's initial pose to its first
+task; they must obey the triangle inequality with the task between
+(:func:`scheduler.tabu.graph_setup` checks it), which keeps every formula
+below exact: taking ``v`` out replaces the arcs ``x -> v -> y`` by one
+``x -> y`` that is no longer.
 
 On a problem without zones, tools, setup times or a blocking oracle, a
 schedule decoded from arm sequences is semi-active: each task starts at the
