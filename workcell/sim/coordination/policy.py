@@ -20,7 +20,7 @@ broadcast, an elected peer that re-solves through
 Examples
 --------
 >>> sorted(POLICIES)
-['centralized']
+['centralized', 'distributed']
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ from scheduler import Problem, Schedule
 from workcell.compile import CompiledCell
 from workcell.sim.comms.link import Link
 from workcell.sim.coordination.centralized import Coordinator
+from workcell.sim.coordination.distributed import DistributedPolicy
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
 from workcell.sim.protocol.ports import ArmPort
@@ -103,7 +104,10 @@ class CoordinationPolicy(Protocol):
 PolicyFactory = Callable[..., CoordinationPolicy]
 """``factory(compiled, plan, loop, link, trace, arms, **settings)``."""
 
-POLICIES: dict[str, PolicyFactory] = {"centralized": Coordinator}
+POLICIES: dict[str, PolicyFactory] = {
+    "centralized": Coordinator,
+    "distributed": DistributedPolicy,
+}
 """Registered coordination policies by name."""
 
 
