@@ -1,0 +1,205 @@
+"""Distributed coordination (S2.4, S2.7's last sentence): one peer per arm, no
+coordinator; resource uses agreed among peers by request/reply in plan order;
+emergency stops broadcast by a peer; unsupported faults refused.
+
+Every check reads public records only: the SimResult's task and reservation
+frames, its metrics and its trace (messages with their stations)."""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import Any
+
+import pytest
+
+from multiarm.errors import UsageError
+from scheduler import solve
+from workcell import compile_cell, load_example
+from workcell.sim import (
+    ActivateZones,
+    ArmFailure,
+    Crash,
+    EmergencyStop,
+    LatePart,
+    MessageLoss,
+    SimOptions,
+    simulate,
+)
+from workcell.sim.comms.media import MEDIA
+
+SMALL = ("supersigma", "scara4", "urdf_cell", "parking")
+
+
+@functools.cache
+def _cell(name: str) -> tuple[Any, Any]:
+    cc = compile_cell(load_example(name))
+    return cc, solve(cc.problem, "greedy", seed=0).schedule
+
+
+@functools.cache
+def _run(name: str, medium: str, coordination: str = "distributed") -> Any:
+    cc, plan = _cell(name)
+    return simulate(cc, plan, medium=medium, coordination=coordination)
+
+
+def _messages(r: Any) -> list[Any]:
+    """Frames delivered by the medium (internal S2.3 messages have src == dst)."""
+    return [e for e in r.trace.of_kind("message") if e.src != e.dst]
+
+
+def _no_overlap(r: Any) -> None:
+    rf = r.reservations_frame()
+    for (kind, res), g in rf.groupby(["kind", "resource"]):
+        g = g.sort_values("start")
+        ends = g["end"].to_numpy()[:-1]
+        starts = g["start"].to_numpy()[1:]
+        assert (starts >= ends - 1e-9).all(), (kind, res, g)
+
+
+@pytest.mark.parametrize("medium", MEDIA)
+@pytest.mark.parametrize("name", SMALL)
+def test_every_small_cell_runs_on_every_medium(name: str, medium: str) -> None:
+    """No failed task, a clean monitor (simulate raises SafetyViolation
+    otherwise), each resource used by one task at a time, and no frame to or
+    from station 0 but the peers' broadcasts (station 0 is an empty place on
+    the medium): there is no coordinator."""
+    r = _run(name, medium)
+    tf = r.tasks_frame()
+    assert (tf["status"] == "done").all(), tf[tf["status"] != "done"]
+    assert r.metrics.failed_tasks == 0
+    assert r.executed is not None
+    _no_overlap(r)
+    msgs = _messages(r)
+    assert all(e.src != 0 for e in msgs)
+    assert all(e.message in ("alarm", "wake_up") for e in msgs if e.dst == 0)
+    assert r.metrics.messages >= len({(e.src, e.time, e.message) for e in msgs}) > 0 or (
+        r.problem.n_arms == 1
+    )
+
+
+@pytest.mark.parametrize("name", ("supersigma", "scara4"))
+def test_resources_are_used_in_the_plan_order_of_the_centralized_coordinator(name: str) -> None:
+    """Both policies give every zone and tool to its tasks in plan order."""
+
+    def order(r: Any) -> dict[tuple[str, str], list[str]]:
+        rf = r.reservations_frame()
+        rf = rf[rf["task"] != ""].sort_values(["start", "end"])
+        return {k: list(g["task"]) for k, g in rf.groupby(["kind", "resource"])}
+
+    d = order(_run(name, "ideal"))
+    c = order(_run(name, "ideal", "centralized"))
+    assert d == c
+    assert any(len(v) > 1 for v in d.values())  # some resource is shared in time
+
+
+def test_peers_ask_only_the_arms_that_may_interfere() -> None:
+    """Zone requests go peer to peer; a cell whose arms share resources
+    exchanges requests and replies, each request answered."""
+    r = _run("scara4", "ideal")
+    msgs = _messages(r)
+    asks = [e for e in msgs if e.message == "zone_request"]
+    replies = [e for e in msgs if e.message == "zone_grant"]
+    assert asks and len(replies) >= len(asks)
+    assert {(e.src, e.dst) for e in replies} == {(e.dst, e.src) for e in asks}
+    # a peer never sends itself a frame, and no trajectory crosses the medium
+    assert not [e for e in msgs if e.message == "trajectory"]
+
+
+def test_same_seed_same_trace_under_faults() -> None:
+    cc, plan = _cell("supersigma")
+    faults = [
+        MessageLoss(0.2),
+        EmergencyStop(at=30.0, duration=2.0),
+        Crash("left", at=50.0),
+    ]
+    runs = [
+        simulate(cc, plan, seed=3, faults=faults, medium="ethernet", coordination="distributed")
+        for _ in range(2)
+    ]
+    a, b = (r.trace.to_records() for r in runs)
+    assert a == b
+    assert runs[0].metrics.retransmissions > 0
+    assert (runs[0].tasks_frame()["status"] == "done").all()
+
+
+def test_emergency_stop_is_broadcast_by_a_peer_and_released_by_id() -> None:
+    cc, plan = _cell("scara4")
+    at, dur = 20.0, 3.0
+    r = simulate(
+        cc,
+        plan,
+        faults=[EmergencyStop(at=at, duration=dur)],
+        medium="multibus2",
+        coordination="distributed",
+    )
+    assert (r.tasks_frame()["status"] == "done").all()
+    alarms = [e for e in _messages(r) if e.message == "alarm"]
+    clears = [e for e in _messages(r) if e.message == "wake_up"]
+    n = r.problem.n_arms
+    assert {e.dst for e in alarms} == set(range(n + 1)) - {alarms[0].src}  # a broadcast
+    assert alarms[0].src == 1  # raised at the lowest working arm's station
+    assert all(at <= e.time < at + dur for e in alarms)
+    assert all(e.time >= at + dur for e in clears)
+    base = _run("scara4", "multibus2")
+    assert r.metrics.executed_makespan >= base.metrics.executed_makespan
+
+
+def test_a_late_part_holds_its_tasks_until_it_comes() -> None:
+    cc, plan = _cell("supersigma")
+    arrivals = cc.cell.taskset.expected_arrivals()
+    part = next(iter(arrivals)) if arrivals else cc.cell.taskset.parts[0].id
+    gated = {
+        task.id for task in cc.cell.taskset.tasks if part in cc.cell.taskset.gating_parts(task.id)
+    }
+    delay = 25.0
+    r = simulate(cc, plan, faults=[LatePart(part, delay)], coordination="distributed")
+    tf = r.tasks_frame()
+    assert (tf["status"] == "done").all()
+    come = float(arrivals.get(part, 0.0)) + delay
+    assert (tf.loc[tf["task"].isin(gated), "start"] >= come - 1e-9).all()
+    assert r.metrics.resolves == 0  # the plan is kept
+
+
+def test_a_part_that_never_comes_fails_its_tasks_and_their_successors() -> None:
+    cc, plan = _cell("supersigma")
+    p = cc.problem
+    part = cc.cell.taskset.parts[0].id
+    gated = [
+        t
+        for t, task in enumerate(cc.cell.taskset.tasks)
+        if part in cc.cell.taskset.gating_parts(task.id)
+    ]
+    r = simulate(cc, plan, faults=[LatePart(part, math.inf)], coordination="distributed")
+    tf = r.tasks_frame().set_index("task")
+    after: set[int] = set()
+    stack = list(gated)
+    while stack:
+        t = stack.pop()
+        if t not in after:
+            after.add(t)
+            stack.extend(p.task_succs[t])
+    for t in range(p.n_tasks):
+        row = tf.loc[p.task_names[t]]
+        if t in gated:
+            assert row["status"] == "failed" and row["cause_kind"] == "part_missing"
+        elif t in after:
+            assert row["status"] == "failed" and row["cause_kind"] == "predecessor"
+        else:
+            assert row["status"] == "done"
+
+
+@pytest.mark.parametrize(
+    "fault",
+    [ArmFailure("left", 10.0), ActivateZones(at=5.0, zones=("z",))],
+    ids=["arm_failure", "activate_zones"],
+)
+def test_unsupported_faults_are_refused_naming_fault_and_policy(fault: Any) -> None:
+    cc, plan = _cell("supersigma")
+    if isinstance(fault, ActivateZones):
+        fault = ActivateZones(at=5.0, zones=(cc.cell.zone_map.zone_names()[0],))
+    with pytest.raises(UsageError, match=rf"{fault.kind}.*coordination='distributed'"):
+        simulate(cc, plan, faults=[fault], coordination="distributed")
+    # the centralized coordinator takes it
+    r = simulate(cc, plan, faults=[fault], options=SimOptions(monitor=False))
+    assert len(r.tasks_frame()) == cc.problem.n_tasks
