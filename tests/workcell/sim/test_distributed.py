@@ -13,7 +13,6 @@ from typing import Any
 
 import pytest
 
-from multiarm.errors import UsageError
 from scheduler import solve
 from workcell import compile_cell, load_example
 from workcell.sim import (
@@ -189,17 +188,48 @@ def test_a_part_that_never_comes_fails_its_tasks_and_their_successors() -> None:
             assert row["status"] == "done"
 
 
-@pytest.mark.parametrize(
-    "fault",
-    [ArmFailure("left", 10.0), ActivateZones(at=5.0, zones=("z",))],
-    ids=["arm_failure", "activate_zones"],
-)
-def test_unsupported_faults_are_refused_naming_fault_and_policy(fault: Any) -> None:
+@pytest.mark.parametrize("at", [20.0, 60.0])
+def test_an_arm_failure_fails_what_comes_after_its_tasks_as_centralized_without_resolve(
+    at: float,
+) -> None:
+    """The failed arm's station sends its last frame; the peers fail the
+    tasks after its unfinished ones, and the others all run: the same tasks
+    as the centralized coordinator keeping its plan (resolve=False)."""
     cc, plan = _cell("supersigma")
-    if isinstance(fault, ActivateZones):
-        fault = ActivateZones(at=5.0, zones=(cc.cell.zone_map.zone_names()[0],))
-    with pytest.raises(UsageError, match=rf"{fault.kind}.*coordination='distributed'"):
-        simulate(cc, plan, faults=[fault], coordination="distributed")
-    # the centralized coordinator takes it
-    r = simulate(cc, plan, faults=[fault], options=SimOptions(monitor=False))
-    assert len(r.tasks_frame()) == cc.problem.n_tasks
+    fault = [ArmFailure("right", at)]
+    d = simulate(cc, plan, faults=fault, medium="ethernet", coordination="distributed")
+    c = simulate(cc, plan, faults=fault, medium="ethernet", options=SimOptions(resolve=False))
+    tf, tc = d.tasks_frame(), c.tasks_frame()
+    assert (tf["status"] == "failed").any()
+    assert list(tf["status"]) == list(tc["status"])
+    assert set(tf["cause_kind"]) <= {"", "arm_out", "predecessor"}
+    assert (tf.loc[tf["status"] == "failed", "cause"] != "").all()
+    right = 1 + cc.problem.arm_names.index("right")
+    last = [e for e in _messages(d) if e.src == right and e.time >= at]
+    assert {e.message for e in last} == {"alarm"}  # its last frame, to every station
+    assert d.metrics.resolves == 0
+
+
+def test_a_zone_activation_stops_every_arm_then_lets_them_go_on() -> None:
+    cc, plan = _cell("scara4")
+    zone = cc.cell.zone_map.zone_names()[0]
+    at = 30.0
+    r = simulate(
+        cc,
+        plan,
+        faults=[ActivateZones(at=at, zones=(zone,))],
+        medium="csma-dcr",
+        coordination="distributed",
+    )
+    assert (r.tasks_frame()["status"] == "done").all()
+    msgs = _messages(r)
+    stops = [e for e in msgs if e.message == "sleep"]
+    stood = [e for e in msgs if e.message == "position"]
+    go = [e for e in msgs if e.message == "active_zone_grant"]
+    raiser = stops[0].src
+    others = set(range(1, r.problem.n_arms + 1)) - {raiser}
+    assert {e.dst for e in stops} >= others
+    assert {e.src for e in stood} == others and {e.dst for e in stood} == {raiser}
+    assert {e.dst for e in go} >= others
+    assert max(e.time for e in stood) <= min(e.time for e in go)
+    assert r.metrics.executed_makespan >= _run("scara4", "csma-dcr").metrics.executed_makespan

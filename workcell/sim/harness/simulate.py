@@ -196,8 +196,7 @@ def simulate(
         The coordination policy (:data:`~workcell.sim.harness.options.COORDINATION_POLICIES`):
         ``"centralized"`` is the S2.7 coordinator, ``"distributed"`` one peer
         per arm and no coordinator
-        (:mod:`workcell.sim.coordination.distributed`; it refuses the fault
-        kinds it does not handle with a UsageError).
+        (:mod:`workcell.sim.coordination.distributed`).
     options : SimOptions, optional
         Re-solving, sampling period, monitor, insertion and force settings,
         ablations (:class:`~workcell.sim.harness.options.SimOptions`); default
@@ -259,13 +258,6 @@ def simulate(
     fplan = as_plan(faults)
     _check_faults(fplan, cc)
     factory: Any = POLICIES[coordination]
-    refused = tuple(getattr(factory, "unsupported_faults", ()))
-    for i, f in enumerate(fplan):
-        if f.kind in refused:
-            raise UsageError(
-                f"faults[{i}] ({f.kind}): fault kind {f.kind!r} is not supported under "
-                f"coordination={coordination!r} (docs/simulation.md)"
-            )
     seed = int(seed)
     thresholds = free_thresholds(options.force_threshold, p.arm_names)
     searches = (

@@ -8,17 +8,17 @@ coordinator. Each record below is the payload of one frame; the frame kinds
 (and so the sizes, :data:`~workcell.sim.comms.medium.MESSAGE_BYTES`) are the
 S2.7 ones whose role they take:
 
-=============== ================ ===========================================
-record          frame kind       meaning
-=============== ================ ===========================================
-:class:`Ask`    ``zone_request`` may I take the resource at this place of its
-                                 plan order? (Ricart-Agrawala request)
-:class:`Reply`  ``zone_grant``   every use of mine before that place is over
-                                 (the reply; it also says how far I am)
-:class:`Notice` ``trajectory_end`` a task ended (done, or failed with a cause)
-:class:`Alarm`  ``alarm`` /      an emergency stop in force / released, by id
-                ``wake_up``
-=============== ================ ===========================================
+* :class:`Ask` (``zone_request``): may I take the resource at this place of
+  its plan order? (the Ricart-Agrawala request);
+* :class:`Reply` (``zone_grant``): every use of mine before that place is
+  over (the reply; it also says how far I am);
+* :class:`Notice` (``trajectory_end``): a task ended (done, or failed with
+  its cause);
+* :class:`Alarm` (``alarm`` / ``wake_up``): an emergency stop in force /
+  released, matched by id;
+* :class:`Activation` (``sleep`` / ``position`` / ``active_zone_grant``): a
+  zone activation: stop / my arm stands / the change is made, go on;
+* :class:`ArmOut` (``alarm``): an arm failed (the last frame of its station).
 
 They are frozen records, never tuples, so the link's checks on the
 coordinator's tuple payloads never apply to them.
@@ -36,7 +36,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["PEER_RECORDS", "Alarm", "Ask", "Notice", "Reply", "Resource"]
+__all__ = [
+    "ACTIVATION_KINDS",
+    "PEER_RECORDS",
+    "Activation",
+    "Alarm",
+    "ArmOut",
+    "Ask",
+    "Notice",
+    "Reply",
+    "Resource",
+]
 
 Resource = tuple[str, int]
 """A resource: ``(kind, index)`` with kind ``"zone"`` (an exclusive zone's
@@ -111,6 +121,55 @@ class Alarm:
     on: bool
 
 
-PEER_RECORDS: dict[type, str] = {Ask: "zone_request", Reply: "zone_grant", Notice: "trajectory_end"}
+@dataclass(frozen=True, slots=True)
+class Activation:
+    """A zone activation (S2.5) agreed among the peers.
+
+    Attributes
+    ----------
+    stop : int
+        Its id (the stop and the release of every arm match by it).
+    zones : tuple of str
+        The zones to make active.
+    phase : str
+        ``"stop"`` (from the arm that raises it: stop and tell me),
+        ``"stopped"`` (the answer: my arm stands) or ``"go"`` (the change
+        is made: go on).
+    origin : int
+        The arm that raised it (and collects the answers).
+    """
+
+    stop: int
+    zones: tuple[str, ...]
+    phase: str
+    origin: int
+
+
+@dataclass(frozen=True, slots=True)
+class ArmOut:
+    """Arm ``arm`` failed: its last frame, broadcast by its station.
+
+    Attributes
+    ----------
+    arm : int
+    """
+
+    arm: int
+
+
+PEER_RECORDS: dict[type, str] = {
+    Ask: "zone_request",
+    Reply: "zone_grant",
+    Notice: "trajectory_end",
+    ArmOut: "alarm",
+}
 """The frame kind that carries each record (an :class:`Alarm` travels as
-``alarm`` when on and ``wake_up`` when off)."""
+``alarm`` when on and ``wake_up`` when off; an :class:`Activation` as
+``sleep``, ``position`` and ``active_zone_grant`` by phase)."""
+
+ACTIVATION_KINDS: dict[str, str] = {
+    "stop": "sleep",
+    "stopped": "position",
+    "go": "active_zone_grant",
+}
+"""The frame kind of each phase of an :class:`Activation`."""

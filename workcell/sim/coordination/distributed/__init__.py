@@ -7,6 +7,6 @@ orders every peer holds.
 """
 
 from workcell.sim.coordination.distributed.peer import Peer
-from workcell.sim.coordination.distributed.policy import UNSUPPORTED_FAULTS, DistributedPolicy
+from workcell.sim.coordination.distributed.policy import DistributedPolicy
 
-__all__ = ["UNSUPPORTED_FAULTS", "DistributedPolicy", "Peer"]
+__all__ = ["DistributedPolicy", "Peer"]

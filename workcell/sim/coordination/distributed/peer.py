@@ -36,10 +36,20 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from workcell.sim.comms.medium import BROADCAST
 from workcell.sim.coordination.distributed.plan import arm_of, build_legs, task_pieces
 from workcell.sim.events.loop import Handle
 from workcell.sim.protocol.messages import Piece
-from workcell.sim.protocol.peers import Alarm, Ask, Notice, Reply, Resource
+from workcell.sim.protocol.peers import (
+    ACTIVATION_KINDS,
+    Activation,
+    Alarm,
+    ArmOut,
+    Ask,
+    Notice,
+    Reply,
+    Resource,
+)
 from workcell.sim.protocol.states import TaskState
 
 if TYPE_CHECKING:
@@ -105,6 +115,15 @@ class Peer:
         self.told_sleep: set[Piece] = set()
         self.deferred: dict[Resource, list[tuple[int, int]]] = {}
         """Per resource, the requests of other arms ``(arm, place)`` not answered yet."""
+        self.out: set[int] = set()
+        """Arms known to have failed (from their last frame)."""
+        self.halts: dict[int, int] = {}
+        """Zone activations in force: id -> the arm that raised it."""
+        self.unacked: list[Activation] = []
+        """Activation stops handed to the controller, not yet confirmed by it."""
+        self.acks: dict[int, set[int]] = {}
+        """Activations this arm raised: id -> the arms that confirmed their stop."""
+        self.raised: dict[int, Activation] = {}
 
     # ------------------------------------------------------------ dispatch
     def start(self) -> None:
@@ -126,7 +145,7 @@ class Peer:
         if self.dispatch_h is not None:
             self.dispatch_h.cancel()
             self.dispatch_h = None
-        if self.busy or self.s.halted:
+        if self.busy or self.halts or self.a in self.s.failed_arms:
             return
         t = self._next_task()
         if t < 0:
@@ -174,7 +193,7 @@ class Peer:
         s = self.s
         to = sorted({arm_of(s.p, s.plan, q) for q in s.p.task_succs[notice.task]} - {self.a})
         for b in to:
-            if b not in s.out:
+            if b not in self.out:
                 s.link.send(self.station, b + 1, "trajectory_end", notice)
 
     # ------------------------------------------------------------ task ends
@@ -259,6 +278,11 @@ class Peer:
                 self.dispatch_next()
             else:
                 self.task_done(int(payload))
+        elif kind == "position" and payload[0] is None and self.unacked:
+            act = self.unacked.pop(0)  # the controller stands for this activation
+            self._send_activation(
+                act.origin, Activation(act.stop, act.zones, "stopped", act.origin)
+            )
         elif kind == "alarm":
             s.trace.add(
                 s.kernel.now,
@@ -288,6 +312,123 @@ class Peer:
                 self.deliver("alarm", ("emergency", payload.stop))
             else:
                 self.deliver("wake_up", ("alarm_clear", payload.stop))
+        elif isinstance(payload, Activation):
+            self._on_activation(b, payload)
+        elif isinstance(payload, ArmOut):
+            self.arm_out(payload.arm)
+
+    # ------------------------------------------------------------ zone activation (S2.5)
+    def _send_activation(self, to: int, act: Activation) -> None:
+        """To one arm's peer, or to every peer (``to == BROADCAST``; this one too)."""
+        kind = ACTIVATION_KINDS[act.phase]
+        if to == self.a:
+            self._on_activation(self.a, act)
+            return
+        if to == BROADCAST:
+            self._on_activation(self.a, act)
+        self.s.link.send(self.station, to + 1 if to >= 0 else BROADCAST, kind, act)
+
+    def raise_activation(self, stop: int, zones: tuple[str, ...]) -> None:
+        """Raise a zone activation here: every arm stops, then the change is
+        made and every arm goes on."""
+        act = Activation(stop, zones, "stop", self.a)
+        self.raised[stop] = act
+        self.acks[stop] = set()
+        self._send_activation(BROADCAST, act)
+
+    def _on_activation(self, b: int, act: Activation) -> None:
+        s = self.s
+        if act.phase == "stop":
+            if act.origin in self.out:
+                return
+            self.halts[act.stop] = act.origin
+            if self.dispatch_h is not None:
+                self.dispatch_h.cancel()
+                self.dispatch_h = None
+            self.unacked.append(act)
+            self.deliver("sleep", ("activation", act.stop))
+        elif act.phase == "stopped":
+            if act.stop in self.acks:
+                self.acks[act.stop].add(b)
+                self._try_go(act.stop)
+        elif act.phase == "go":
+            if self.halts.pop(act.stop, None) is None:
+                return
+            if act.zones:
+                self.deliver("active_zone_grant", ("zones", act.zones))
+            self.deliver("wake_up", ("activation", act.stop))
+            if act.origin == self.a:
+                s.trace.add(
+                    s.kernel.now,
+                    "grant",
+                    arm=s.p.arm_names[self.a],
+                    detail="active zones activated: " + ", ".join(act.zones),
+                )
+            self.dispatch_next()
+
+    def _try_go(self, stop: int) -> None:
+        live = set(range(self.s.p.n_arms)) - self.out
+        got = self.acks.get(stop)
+        if got is None or not live <= got:
+            return
+        act = self.raised.pop(stop)
+        del self.acks[stop]
+        self._send_activation(BROADCAST, Activation(stop, act.zones, "go", self.a))
+
+    # ------------------------------------------------------------ arm failures
+    def fail(self) -> None:
+        """This arm failed: its unfinished tasks go back to pending (reported
+        by the harness with their cause), and its station sends its last
+        frame, :class:`~workcell.sim.protocol.peers.ArmOut`, to every peer."""
+        s = self.s
+        if self.dispatch_h is not None:
+            self.dispatch_h.cancel()
+            self.dispatch_h = None
+        for t in self.tasks:
+            if s.status[t] in (TaskState.DISPATCHED, TaskState.RUNNING):
+                s.set_status(t, TaskState.PENDING)
+                s.trace.add(
+                    s.kernel.now,
+                    "task_failed",
+                    arm=s.p.arm_names[self.a],
+                    task=s.p.task_names[t],
+                    detail="interrupted by the arm's failure; "
+                    "no re-solve under distributed coordination",
+                )
+        self.waiting.clear()
+        self.deferred.clear()
+        s.link.send(self.station, BROADCAST, "alarm", ArmOut(self.a))
+
+    def arm_out(self, b: int) -> None:
+        """Arm ``b`` failed: its uses no longer hold anyone back, and the own
+        tasks after its unfinished ones can never run (the plan is kept)."""
+        if b in self.out or b == self.a:
+            return
+        s = self.s
+        self.out.add(b)
+        for k, order in s.orders.items():
+            if b in self.others.get(k, {}):
+                self.known[(b, k)] = len(order)
+        for k, waits in self.deferred.items():
+            self.deferred[k] = [(x, i) for x, i in waits if x != b]
+        for t in self.tasks:
+            if s.status[t] in (TaskState.DONE, TaskState.FAILED, TaskState.RUNNING):
+                continue
+            lost = [
+                q for q in s.p.task_preds[t] if q not in self.done and arm_of(s.p, s.plan, q) == b
+            ]
+            if lost:
+                name = s.p.task_names[lost[0]]
+                why = f"predecessor {name!r} cannot run: its arm {s.p.arm_names[b]!r} failed"
+                self.task_failed(
+                    t, why + " (no re-solve under distributed coordination)", "predecessor"
+                )
+        for stop in list(self.halts):  # an activation its raiser cannot end
+            if self.halts[stop] == b:
+                self._on_activation(b, Activation(stop, (), "go", b))
+        for stop in list(self.acks):
+            self._try_go(stop)
+        self._serve()
 
     # ------------------------------------------------------------ mutual exclusion
     def _upto(self, k: Resource) -> int:
@@ -315,7 +456,7 @@ class Peer:
         if piece not in self.waiting:
             self.waiting.append(piece)
         for b in self._missing(k, i):
-            if b in s.out or self.asked.get((b, k), -1) >= i:
+            if b in self.out or self.asked.get((b, k), -1) >= i:
                 continue
             self.asked[(b, k)] = i
             s.link.send(self.station, b + 1, "zone_request", Ask(k, i))
@@ -374,7 +515,7 @@ class Peer:
             keep = []
             for b, i in waiting:
                 if u >= i:
-                    if b not in self.s.out:
+                    if b not in self.out:
                         self.s.link.send(self.station, b + 1, "zone_grant", Reply(k, u))
                 else:
                     keep.append((b, i))

@@ -21,9 +21,19 @@ Faults under this policy:
   a task dispatched with its start allowed is withdrawn and sent again).
   A part that never comes fails its tasks and, through notices, every task
   after them.
-* ``arm_failure`` and ``activate_zones`` are refused
-  (:data:`UNSUPPORTED_FAULTS`): without a coordinator the plan would have
-  to be re-solved and agreed among the peers, which this policy does not do.
+* ``activate_zones``: raised at the lowest working arm's station; its peer
+  broadcasts the stop, every peer stops its arm (and dispatches nothing
+  new) and answers once its controller stands; with every working arm's
+  answer in, the raiser broadcasts the change and every arm goes on (stops
+  and releases matched by id). The peers keep their mutual exclusion over
+  every zone of the plan, active or not.
+* ``arm_failure``: the failed arm's station sends its last frame
+  (:class:`~workcell.sim.protocol.peers.ArmOut`) to every peer. Its uses of
+  every resource then hold no one back, and each peer fails its tasks that
+  come after an unfinished task of the failed arm (and tells the peers of
+  their successors). There is no re-solve under this policy: the plan is
+  kept, as with ``SimOptions(resolve=False)`` under the centralized
+  coordinator, whatever ``resolve`` says.
 """
 
 from __future__ import annotations
@@ -43,16 +53,13 @@ from workcell.sim.coordination.guard import GeometryGuard
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
 from workcell.sim.protocol.messages import Piece
-from workcell.sim.protocol.peers import PEER_RECORDS, Alarm, Resource
+from workcell.sim.protocol.peers import PEER_RECORDS, Activation, Alarm, Resource
 from workcell.sim.protocol.ports import ArmPort
 from workcell.sim.protocol.states import TASK_MACHINE, TaskState
 
-__all__ = ["UNSUPPORTED_FAULTS", "DistributedPolicy"]
+__all__ = ["DistributedPolicy"]
 
-UNSUPPORTED_FAULTS: tuple[str, ...] = ("arm_failure", "activate_zones")
-"""Fault kinds :func:`workcell.simulate` refuses under ``coordination="distributed"``."""
-
-_PEER_TYPES = (*PEER_RECORDS, Alarm)
+_PEER_TYPES = (*PEER_RECORDS, Alarm, Activation)
 
 
 class DistributedPolicy:
@@ -66,7 +73,6 @@ class DistributedPolicy:
     check before it sets off (S2.12).
     """
 
-    unsupported_faults = UNSUPPORTED_FAULTS
     colocated = True
     """The peers share the arms' stations: a controller's messages to
     station 0 go to its own peer (:meth:`controller_message`)."""
@@ -107,13 +113,10 @@ class DistributedPolicy:
         self.plan_of: list[int] = [0] * T
         self.dropped: frozenset[int] = frozenset()
         self.failed_arms: set[int] = set()
-        self.out: set[int] = set()
-        """Arms out of the run (none under this policy: arm failures are refused)."""
         self.resolves = 0
         self.resolve_latency: list[float] = []
         self.detours = 0
         self.geo_held: dict[int, list[int]] = {}
-        self.halted = False
         self.orders: dict[Resource, list[Piece]] = resource_orders(p, plan) if zone_checks else {}
         self.position: dict[Piece, int] = {
             piece: i for order in self.orders.values() for i, piece in enumerate(order)
@@ -172,6 +175,8 @@ class DistributedPolicy:
     def _router(self, a: int, peer: Peer, ctl_rx: Any) -> Any:
         def rx(frame: Frame) -> None:
             payload = frame.payload[0]  # type: ignore[index]
+            if a in self.failed_arms:
+                return  # the arm's station is silent
             if isinstance(payload, _PEER_TYPES):
                 peer.from_peer(frame.src - 1, frame.kind, payload)
             else:  # pragma: no cover - nothing else is sent to an arm's station
@@ -191,7 +196,8 @@ class DistributedPolicy:
     def controller_message(self, src: int, kind: str, payload: Any) -> None:
         """A controller's message to its own peer (the same station; no medium:
         handed over as a new event at the same instant, as the ideal medium)."""
-        self.kernel.schedule(0.0, self.peers[src - 1].from_controller, kind, payload)
+        if src - 1 not in self.failed_arms:
+            self.kernel.schedule(0.0, self.peers[src - 1].from_controller, kind, payload)
 
     # ------------------------------------------------------------ policy protocol
     def start(self) -> None:
@@ -211,17 +217,37 @@ class DistributedPolicy:
         self.trace.add(now, "task_end", arm=self.p.arm_names[a], task=self.p.task_names[t])
 
     def arm_failed(self, a: int) -> None:
-        """Refused before the run (:data:`UNSUPPORTED_FAULTS`)."""
-        raise UsageError("fault 'arm_failure' is not supported under coordination='distributed'")
+        """Fault: arm ``a`` fails for good (its peer with it, after its last frame)."""
+        if a in self.failed_arms:
+            return
+        self.failed_arms.add(a)
+        self.arms[a].fail()
+        self.trace.add(self.kernel.now, "fault", arm=self.p.arm_names[a], detail="arm failure")
+        self.peers[a].fail()
+
+    def _raiser(self) -> int:
+        """The lowest working arm (where a cell-wide fault is raised)."""
+        return min(x for x in range(self.p.n_arms) if x not in self.failed_arms)
 
     def activate(self, zones: tuple[str, ...]) -> None:
-        """Refused before the run (:data:`UNSUPPORTED_FAULTS`)."""
-        raise UsageError("fault 'activate_zones' is not supported under coordination='distributed'")
+        """Fault: change the active zones (S2.5), raised at the lowest working arm."""
+        if len(self.failed_arms) == self.p.n_arms:
+            return
+        a = self._raiser()
+        self.trace.add(
+            self.kernel.now,
+            "fault",
+            arm=self.p.arm_names[a],
+            detail=f"zone activation {', '.join(zones)} (raised by arm {self.p.arm_names[a]!r})",
+        )
+        self.peers[a].raise_activation(next(self._stop_ids), tuple(zones))
 
     def emergency_stop(self, duration: float) -> None:
         """The stop is raised at the lowest working arm's station; its peer
         stops its arm and broadcasts the alarm, and its release later."""
-        a = min(x for x in range(self.p.n_arms) if x not in self.out)
+        if len(self.failed_arms) == self.p.n_arms:
+            return
+        a = self._raiser()
         stop = next(self._stop_ids)
         self.trace.add(
             self.kernel.now,
@@ -234,6 +260,10 @@ class DistributedPolicy:
         self.kernel.schedule(duration, self._clear_alarm, a, stop)
 
     def _clear_alarm(self, a: int, stop: int) -> None:
+        if a in self.failed_arms:  # the raiser failed: the next working arm releases it
+            if len(self.failed_arms) == self.p.n_arms:
+                return
+            a = self._raiser()
         self.trace.add(
             self.kernel.now, "fault", arm=self.p.arm_names[a], detail="emergency stop cleared"
         )
