@@ -233,3 +233,22 @@ def test_a_zone_activation_stops_every_arm_then_lets_them_go_on() -> None:
     assert {e.dst for e in go} >= others
     assert max(e.time for e in stood) <= min(e.time for e in go)
     assert r.metrics.executed_makespan >= _run("scara4", "csma-dcr").metrics.executed_makespan
+
+
+@pytest.mark.parametrize("delay", [5.0, 16.4])
+def test_an_arm_waiting_in_the_way_backs_off_when_a_late_part_reorders_the_cell(
+    delay: float,
+) -> None:
+    """Regression (found by a seeded fault campaign on `parking`): with the
+    blank late, the delivering arm waits at its start, in the way of the
+    press arm that holds the zones it waits for. The held arm has the
+    waiting arm back off to its home joints (S2.6) instead of a stall."""
+    cc, plan = _cell("parking")
+    r = simulate(
+        cc, plan, faults=[LatePart("blank1", delay)], medium="fixed", coordination="distributed"
+    )
+    tf = r.tasks_frame()
+    assert (tf["status"] == "done").all(), tf[["task", "status", "cause"]]
+    backs = r.trace.of_kind("detour")
+    assert backs and all("backs off" in e.detail for e in backs)
+    assert r.metrics.detours == len(backs)

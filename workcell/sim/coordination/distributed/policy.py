@@ -137,6 +137,8 @@ class DistributedPolicy:
         self._recheck_at = -1.0
         self._recheck_n = 0
         self.recheck_limit = 8 + 4 * A
+        self.backoffs = 0
+        self.max_backoffs = 2 * T + 2
         self.peers: list[Peer] = []
         for a in range(A):
             ctl_rx = net.receivers.get(a + 1)
@@ -332,7 +334,39 @@ class DistributedPolicy:
         self._recheck_h = self.kernel.schedule(delay, self._recheck, priority=1)
 
     def _recheck(self) -> None:
+        """The held arms check again; an arm held by arms that all stand
+        waiting for something else (a geometric deadlock, S2.6) has them back
+        off to their home joints, and they come back once it has passed."""
         self._recheck_h = None
         for ctl in self.arms:
-            if not ctl.failed and ctl.held_by_geometry():
-                ctl.release_geometry_hold()
+            if ctl.failed:
+                continue
+            if ctl.away is not None and ctl.leg is None and ctl.away_until is not None:
+                ai, leg_a, _k = ctl.away_until
+                mover = self.arms[ai]
+                passed = mover.leg is not leg_a and mover.away is None
+                waits = mover.stuck() and not mover.held_by_geometry()
+                if mover.failed or passed or waits:
+                    ctl.come_back()
+            if not ctl.held_by_geometry():
+                continue
+            ctl.release_geometry_hold()
+            blockers = self.geo_held.get(ctl.index, [])
+            if (
+                not ctl.held_by_geometry()
+                or not blockers
+                or self.backoffs >= self.max_backoffs
+                or not all(self.arms[b].stuck() and self.arms[b].away is None for b in blockers)
+            ):
+                continue
+            for b in blockers:
+                if self.arms[b].back_off((ctl.index, ctl.leg, ctl.k)):
+                    self.backoffs += 1
+                    self.detours += 1
+                    self.trace.add(
+                        self.kernel.now,
+                        "detour",
+                        arm=self.p.arm_names[b],
+                        detail=f"geometric deadlock (S2.6): backs off to its home joints "
+                        f"out of arm {ctl.name!r}'s way",
+                    )
