@@ -252,3 +252,34 @@ def test_an_arm_waiting_in_the_way_backs_off_when_a_late_part_reorders_the_cell(
     backs = r.trace.of_kind("detour")
     assert backs and all("backs off" in e.detail for e in backs)
     assert r.metrics.detours == len(backs)
+
+
+@pytest.mark.parametrize(
+    ("faults", "medium"),
+    [
+        ([ArmFailure("sb", 7.95)], "ideal"),
+        ([LatePart("blank2", math.inf), LatePart("blank1", 14.32)], "ethernet"),
+    ],
+    ids=["failed_arm_in_the_way", "idle_arm_in_the_way"],
+)
+def test_an_arm_held_by_a_standing_arm_goes_around_it(faults: Any, medium: str) -> None:
+    """Regressions (a seeded fault campaign on `parking`, the campaign's own
+    plan): an arm held by an arm that failed in its way, or by one left idle
+    where its last task ended, takes an alternative trajectory (S2.12) and
+    finishes its tasks; the same tasks are done as under the centralized
+    coordinator keeping its plan."""
+    from workcell.campaign import prepare
+
+    cc = prepare("parking")
+    opts = SimOptions(resolve=False)
+    d, c = (
+        simulate(
+            cc.compiled, cc.schedule, faults=faults, medium=medium, coordination=co, options=opts
+        )
+        for co in ("distributed", "centralized")
+    )
+    td, tc = d.tasks_frame(), c.tasks_frame()
+    assert list(td["status"]) == list(tc["status"])
+    assert list(td["cause_kind"]) == list(tc["cause_kind"])
+    assert "deadlock" not in set(td["cause_kind"]) and "stall" not in set(td["cause_kind"])
+    assert any("alternative trajectory" in e.detail for e in d.trace.of_kind("detour"))

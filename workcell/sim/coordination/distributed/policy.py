@@ -47,6 +47,7 @@ from scheduler import Problem, Schedule
 from workcell.compile import CompiledCell
 from workcell.sim.comms.link import Link
 from workcell.sim.comms.medium import BROADCAST, Frame
+from workcell.sim.coordination.distributed import geometry
 from workcell.sim.coordination.distributed.peer import Peer
 from workcell.sim.coordination.distributed.plan import arm_of, resource_orders
 from workcell.sim.coordination.guard import GeometryGuard
@@ -139,6 +140,9 @@ class DistributedPolicy:
         self.recheck_limit = 8 + 4 * A
         self.backoffs = 0
         self.max_backoffs = 2 * T + 2
+        self.detour_tried: set[tuple[int, int, int]] = set()
+        self.detour_checks = 10_000
+        """Work limit of one OMPL detour search (validity checks)."""
         self.peers: list[Peer] = []
         for a in range(A):
             ctl_rx = net.receivers.get(a + 1)
@@ -226,6 +230,7 @@ class DistributedPolicy:
         self.arms[a].fail()
         self.trace.add(self.kernel.now, "fault", arm=self.p.arm_names[a], detail="arm failure")
         self.peers[a].fail()
+        self.arm_moved()  # it left its place (retracted home): the held arms look again
 
     def _raiser(self) -> int:
         """The lowest working arm (where a cell-wide fault is raised)."""
@@ -285,88 +290,8 @@ class DistributedPolicy:
                 self.peers[arm_of(self.p, self.plan, t)].part_late(t, arrival, part)
 
     # ------------------------------------------------------------ geometry (S2.12)
-    def check_departure(self, ctl: ArmPort) -> bool:
-        """Port: the arm's own check before it sets off: the motion to its
-        next station against the other arms' motion; a contact holds it."""
-        assert self.guard is not None
-        blockers = self.guard.blockers(ctl, self.arms)
-        a = ctl.index
-        if not blockers:
-            if self.geo_held.pop(a, None) is not None:
-                self.trace.add(
-                    self.kernel.now, "wake", arm=ctl.name, detail="geometric conflict over: go on"
-                )
-            return True
-        if self.geo_held.get(a) != blockers:
-            names = ", ".join(repr(self.p.arm_names[b]) for b in blockers)
-            self.trace.add(
-                self.kernel.now,
-                "sleep",
-                arm=ctl.name,
-                task=self.p.task_names[ctl.leg.task] if ctl.leg is not None else "",
-                detail=f"geometric conflict (S2.12): arm {names} in the way: stop",
-            )
-            self.geo_held[a] = blockers
-            self.arm_moved()
-        return False
-
-    def check_way(self, ctl: ArmPort) -> bool:
-        """Port: is the arm's way to its next station free?"""
-        assert self.guard is not None
-        return not self.guard.blockers(ctl, self.arms)
-
-    def arm_moved(self) -> None:
-        """Port: something moved or stopped: the held arms check again (at
-        most ``recheck_limit`` passes at one instant, then one guard period
-        later, at most ``max_stalled`` times with no task starting or ending)."""
-        if self._recheck_h is not None:
-            return
-        now = self.kernel.now
-        if now != self._recheck_at:
-            self._recheck_at, self._recheck_n = now, 0
-        self._recheck_n += 1
-        delay = 0.0
-        if self._recheck_n > self.recheck_limit:
-            if self.stalled >= self.max_stalled:
-                return
-            self.stalled += 1
-            delay = self.guard.dt if self.guard is not None else 0.01
-        self._recheck_h = self.kernel.schedule(delay, self._recheck, priority=1)
-
-    def _recheck(self) -> None:
-        """The held arms check again; an arm held by arms that all stand
-        waiting for something else (a geometric deadlock, S2.6) has them back
-        off to their home joints, and they come back once it has passed."""
-        self._recheck_h = None
-        for ctl in self.arms:
-            if ctl.failed:
-                continue
-            if ctl.away is not None and ctl.leg is None and ctl.away_until is not None:
-                ai, leg_a, _k = ctl.away_until
-                mover = self.arms[ai]
-                passed = mover.leg is not leg_a and mover.away is None
-                waits = mover.stuck() and not mover.held_by_geometry()
-                if mover.failed or passed or waits:
-                    ctl.come_back()
-            if not ctl.held_by_geometry():
-                continue
-            ctl.release_geometry_hold()
-            blockers = self.geo_held.get(ctl.index, [])
-            if (
-                not ctl.held_by_geometry()
-                or not blockers
-                or self.backoffs >= self.max_backoffs
-                or not all(self.arms[b].stuck() and self.arms[b].away is None for b in blockers)
-            ):
-                continue
-            for b in blockers:
-                if self.arms[b].back_off((ctl.index, ctl.leg, ctl.k)):
-                    self.backoffs += 1
-                    self.detours += 1
-                    self.trace.add(
-                        self.kernel.now,
-                        "detour",
-                        arm=self.p.arm_names[b],
-                        detail=f"geometric deadlock (S2.6): backs off to its home joints "
-                        f"out of arm {ctl.name!r}'s way",
-                    )
+    check_departure = geometry.check_departure
+    check_way = geometry.check_way
+    arm_moved = geometry.arm_moved
+    _recheck = geometry.recheck
+    _try_detour = geometry.try_detour
