@@ -246,6 +246,8 @@ class Peer:
     def part_late(self, t: int, arrival: float, part: str) -> None:
         """Own task ``t``'s part ``part`` comes at ``arrival`` (inf: never)."""
         s = self.s
+        if self.a in s.failed_arms:
+            return  # its station is silent; the harness reports its tasks
         if s.status[t] in (TaskState.DONE, TaskState.RUNNING, TaskState.FAILED):
             return
         self.release[t] = max(self.release[t], arrival)
