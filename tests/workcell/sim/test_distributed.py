@@ -1,6 +1,7 @@
 """Distributed coordination (S2.4, S2.7's last sentence): one peer per arm, no
 coordinator; resource uses agreed among peers by request/reply in plan order;
-emergency stops broadcast by a peer; unsupported faults refused.
+emergency stops and zone activations broadcast; arm failures told by the failed
+station's last frame; the plan kept (no re-solve).
 
 Every check reads public records only: the SimResult's task and reservation
 frames, its metrics and its trace (messages with their stations)."""
