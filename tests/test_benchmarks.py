@@ -34,6 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_small",
         "bench_grid",
         "bench_urdf",
+        "bench_policies",
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:

@@ -378,12 +378,13 @@ def test_sim_options_and_the_result_are_frozen_records(supersigma: Any, plans: A
     assert r.plan.makespan == pytest.approx(plan.makespan)
 
 
-def test_only_the_centralized_policy_exists(supersigma: Any, plans: Any) -> None:
+def test_an_unknown_policy_is_refused_listing_the_known_ones(supersigma: Any, plans: Any) -> None:
     plan = plans["supersigma"]["greedy"]
     with pytest.raises(
-        UsageError, match=r"unknown coordination policy 'distributed' \(known: centralized\)"
+        UsageError,
+        match=r"unknown coordination policy 'gossip' \(known: centralized, distributed\)",
     ):
-        simulate(supersigma, plan, coordination="distributed")
+        simulate(supersigma, plan, coordination="gossip")
     with pytest.raises(UsageError, match="options must be a SimOptions"):
         simulate(supersigma, plan, options={"resolve": False})  # type: ignore[arg-type]
     with pytest.raises(TypeError):

@@ -28,7 +28,7 @@ CONTROL_TIME = 1.25e-4
 """Seconds of one CPU's time to control one arm for one sampling period
 (S2.2: an i860 ran 8 four-axis SCARA arms at 1 ms, so at most 1/8 ms each)."""
 
-COORDINATION_POLICIES: tuple[str, ...] = ("centralized",)
+COORDINATION_POLICIES: tuple[str, ...] = ("centralized", "distributed")
 """The coordination policies :func:`workcell.simulate` knows (S2.7's
 centralized coordinator)."""
 
