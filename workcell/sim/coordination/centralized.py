@@ -484,6 +484,7 @@ class Coordinator:
     _try_activation = recovery._try_activation
     _withdraw = recovery._withdraw
     _withdraw_never = recovery._withdraw_never
+    _fail_never = recovery._fail_never
     resolve = recovery.resolve
 
     # ------------------------------------------------------------ faults
