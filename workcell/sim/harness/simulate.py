@@ -312,6 +312,9 @@ def simulate(
         zone_checks=options.zone_protocol,
         geometry=options.geometry_guard,
         resolving=resolve,
+        detours=options.detours,
+        detour_checks=options.detour_checks,
+        guard_answer=options.guard_answer,
     )
     _connect(coord, arms, geometry=options.geometry_guard)
     arm_index = {n: i for i, n in enumerate(p.arm_names)}
