@@ -501,6 +501,7 @@ class Coordinator:
     _withdraw = recovery._withdraw
     _withdraw_never = recovery._withdraw_never
     _fail_never = recovery._fail_never
+    _fail_impossible = recovery._fail_impossible
     resolve = recovery.resolve
 
     # ------------------------------------------------------------ faults

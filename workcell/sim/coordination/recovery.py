@@ -276,6 +276,38 @@ def _fail_never(self: _Self) -> None:
         self._dispatch_next(b)
 
 
+def _fail_impossible(self: _Self) -> None:
+    """After a re-solve: the tasks no working arm can do (every capable arm
+    failed) and the tasks after them can never run, whatever later plans
+    say: they fail now, at the instant that became known, with their cause."""
+    p = self.p
+    now = self.kernel.now
+    root: dict[int, int] = {}
+    for t in p.topological_order:
+        if self.status[t] not in ("pending", "dispatched"):
+            continue
+        if all(int(p.mode_arm[m]) in self.failed_arms for m in p.task_modes[t]):
+            root[t] = t
+            self.cause[t] = "no working arm can do it (every capable arm failed)"
+            self.cause_kind[t] = "arm_failed"
+        else:
+            q = next((root[q] for q in sorted(p.task_preds[t]) if q in root), None)
+            if q is None:
+                continue
+            root[t] = q
+            self.cause[t] = (
+                f"predecessor {p.task_names[q]!r} cannot run: every arm able to do it failed"
+            )
+            self.cause_kind[t] = "predecessor"
+        if self.status[t] == "dispatched":  # its arm waits at its start
+            self._withdraw(t)
+        self.set_status(t, TaskState.FAILED)
+        a = int(p.mode_arm[int(self.plan.mode[t])])
+        self.trace.add(
+            now, "task_failed", arm=p.arm_names[a], task=p.task_names[t], detail=self.cause[t]
+        )
+
+
 def _withdraw_never(self: _Self) -> None:
     """Take back the dispatched tasks that can no longer run under the
     kept plan (a predecessor on a failed arm): their arms would wait at
@@ -340,6 +372,7 @@ def resolve(self: _Self, reason: str) -> None:
             self.set_status(t, TaskState.PENDING)
     self.plan = new
     self.dropped = res.dropped
+    self._fail_impossible()
     self.plans.append(new)
     for t in range(p.n_tasks):
         if t not in res.dropped:
