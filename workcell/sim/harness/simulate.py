@@ -326,6 +326,9 @@ def simulate(
         zone_checks=options.zone_protocol,
         geometry=options.geometry_guard,
         resolving=resolve,
+        detours=options.detours,
+        detour_checks=options.detour_checks,
+        guard_answer=options.guard_answer,
     )
     policy_box.append(coord)
     _connect(coord, arms, geometry=options.geometry_guard)
