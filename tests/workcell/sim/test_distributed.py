@@ -304,3 +304,28 @@ def test_a_seeded_fault_campaign_slice_finds_nothing(cell: str) -> None:
         episode = dataclasses.replace(episode, coordination="distributed", resolve=False)
         result = run_episode(cc, episode)
         assert not result.findings, (episode.faults_json(), episode.medium, result.findings)
+
+
+def test_the_detour_ablations_reach_the_peers() -> None:
+    """``SimOptions.detours``, ``detour_checks`` and ``guard_answer`` mean the
+    same under both policies: on ``parking`` (S2.6) the tree plan's peer goes
+    around the parked arm; with detours off it waits, later, every task done;
+    a guard answer that never blocks leaves nothing to go around."""
+    from scheduler import TreeOptions
+
+    cc, _ = _cell("parking")
+    plan = solve(cc, "tree", time_limit=None, seed=0, options=TreeOptions(max_evaluations=2000))
+    assert plan.schedule is not None
+    runs = {
+        name: simulate(cc, plan.schedule, seed=0, coordination="distributed", options=opts)
+        for name, opts in {
+            "on": SimOptions(),
+            "off": SimOptions(detours=False),
+            "clear": SimOptions(monitor=False, guard_answer=lambda mover, arms: ()),
+        }.items()
+    }
+    n = cc.problem.n_tasks
+    assert runs["on"].metrics.detours >= 1 and runs["off"].metrics.detours == 0
+    assert runs["clear"].metrics.detours == 0
+    assert all(r.metrics.done_tasks == n for r in runs.values())
+    assert runs["off"].metrics.executed_makespan > runs["on"].metrics.executed_makespan

@@ -132,7 +132,8 @@ def try_detour(self: _Self, ctl: ArmPort) -> bool:
     leg = ctl.leg
     blockers = self.geo_held.get(ctl.index, [])
     if (
-        leg is None
+        not self.detours_on
+        or leg is None
         or leg.kind != "task"
         or ctl.away is not None
         or not blockers

@@ -39,7 +39,7 @@ Faults under this policy:
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from multiarm.errors import InternalError, UsageError
@@ -71,7 +71,10 @@ class DistributedPolicy:
     ``resolve_budget`` and ``resolve_evaluations`` are kept for the records
     (this policy never re-solves), ``zone_checks=False`` grants every use at
     once (tests of the safety monitor only), ``geometry`` runs each arm's
-    check before it sets off (S2.12).
+    check before it sets off (S2.12); ``detours``, ``detour_checks`` and
+    ``guard_answer`` are the :class:`~workcell.sim.harness.options.SimOptions`
+    fields of the same names (alternative trajectories on or off, the detour
+    search's work limit, a stand-in for the geometric check's answer).
     """
 
     colocated = True
@@ -93,6 +96,9 @@ class DistributedPolicy:
         zone_checks: bool = True,
         geometry: bool = True,
         resolving: bool = True,
+        detours: bool = True,
+        detour_checks: int = 10_000,
+        guard_answer: Callable[[ArmPort, Sequence[ArmPort]], Sequence[int]] | None = None,
     ) -> None:
         self.cc = compiled
         self.p: Problem = compiled.problem
@@ -131,7 +137,11 @@ class DistributedPolicy:
             for a in range(A)
         ]
         self._stop_ids = itertools.count(1)
-        self.guard = GeometryGuard(compiled, clock=lambda: kernel.now) if geometry else None
+        self.guard = (
+            GeometryGuard(compiled, clock=lambda: kernel.now, answer=guard_answer)
+            if geometry
+            else None
+        )
         self._recheck_h: Handle | None = None
         self.stalled = 0
         self.max_stalled = 200
@@ -141,7 +151,8 @@ class DistributedPolicy:
         self.backoffs = 0
         self.max_backoffs = 2 * T + 2
         self.detour_tried: set[tuple[int, int, int]] = set()
-        self.detour_checks = 10_000
+        self.detour_checks = int(detour_checks)
+        self.detours_on = bool(detours)
         """Work limit of one OMPL detour search (validity checks)."""
         self.peers: list[Peer] = []
         for a in range(A):
