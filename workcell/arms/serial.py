@@ -32,26 +32,17 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 from numba import njit
 
-from multiarm.errors import Unreachable, ValidationError
+from multiarm.errors import ValidationError
 from multiarm.types import FloatArray, JointVector, Transform
-from workcell.arms._common import DriveArm
+from workcell.arms._common import IK_TOL, IK_WEIGHTS, DriveArm, numerical_ik
 from workcell.arms._kinematics_jit import dh_frames
 from workcell.arms.base import JointKind, LinkShape
 from workcell.arms.profiles import ServoDrive
 
 __all__ = ["SerialArm"]
 
-IK_TOL = 1e-9
-"""IK convergence: position error (metres) and orientation error (radians)."""
-
-IK_RESTARTS = 16
-"""Pseudo-random starts (fixed seed) tried after the hint and the home pose."""
-
 IK_ITERATIONS = 100
 """Levenberg-Marquardt iterations per start."""
-
-IK_LENGTH = 0.3
-"""Metres per radian weighing the orientation error against the position error."""
 
 
 def _capsule_between(name: str, frame: int, p: FloatArray, r: float) -> LinkShape | None:
@@ -269,32 +260,15 @@ class SerialArm(DriveArm):
         return out
 
     def ik(self, pose: Transform, q_hint: JointVector | None = None) -> JointVector:
-        target = np.asarray(pose, dtype=float)
-        if target.shape != (4, 4) or not np.all(np.isfinite(target)):
-            raise ValidationError(f"arm {self.name!r}: a pose must be a finite (4, 4) transform")
+        return numerical_ik(self, pose, q_hint, self._shoulder, self._max_reach, self._solve)
+
+    def _solve(self, target: FloatArray, starts: FloatArray) -> tuple[FloatArray, float, bool]:
         lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
-        n = len(self.dh)
-        dist = float(np.linalg.norm(target[:3, 3] - self._shoulder))
-        if dist > self._max_reach:
-            raise Unreachable(
-                f"arm {self.name!r}: the point is {dist:.4g} m from the shoulder, beyond the "
-                f"reach {self._max_reach:.4g} m"
-            )
-        first = self.home if q_hint is None else np.asarray(q_hint, dtype=float)
-        rng = np.random.default_rng(12345)
-        starts = np.vstack([first, self.home, lo + (hi - lo) * rng.random((IK_RESTARTS, n))])
-        w = np.array([1.0, 1.0, 1.0, IK_LENGTH, IK_LENGTH, IK_LENGTH])
         prism = np.array([k == "prismatic" for k in self.joint_kinds])
         q, err, ok = _ik_lm(
-            self.dh, prism, lo, hi, self.base, target, starts, w, IK_TOL, IK_ITERATIONS
+            self.dh, prism, lo, hi, self.base, target, starts, IK_WEIGHTS, IK_TOL, IK_ITERATIONS
         )
-        if not ok:
-            raise Unreachable(
-                f"arm {self.name!r}: no joint vector within the limits reaches the pose "
-                f"(best error {err:.3g} after {len(starts)} starts)"
-            )
-        out: FloatArray = np.clip(q, lo, hi)
-        return out
+        return q, float(err), bool(ok)
 
 
 # ------------------------------------------------------------------ numba IK
