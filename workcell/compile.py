@@ -61,7 +61,7 @@ from typing import Any, Literal
 import numpy as np
 
 from multiarm.errors import NoFeasibleSchedule, Unreachable, UsageError, ValidationError
-from multiarm.types import FloatArray, JointVector
+from multiarm.types import BoolArray, FloatArray, JointVector
 from scheduler import MatrixSetup, Model, Problem, Setup, Window
 from scheduler.setup import BoundSetup
 from scheduler.view import ProblemView
@@ -490,11 +490,14 @@ def _pair_windows(
     pad = max(cell.padding, grid_padding)
     samples: list[tuple[FloatArray, FloatArray]] = []
     boxes: list[list[FloatArray]] = [[] for _ in cell.arms]
+    seen: set[int] = set()
     for (_t, a), cm in modes:
         arm = cell.arms[a]
-        t, q = sample_trajectory(arm, cm.trajectory, pad)
+        t, q = sample_trajectory(arm, cm.trajectory, pad)  # shared by modes of one motion
         samples.append((t, q))
-        boxes[a].append(capsules_box(*arm_capsules(arm, q), pad))
+        if id(q) not in seen:
+            seen.add(id(q))
+            boxes[a].append(capsules_box(*arm_capsules(arm, q), pad))
     for a, (arm, q0) in enumerate(zip(cell.arms, cell.start, strict=True)):
         boxes[a].append(capsules_box(*arm_capsules(arm, np.asarray(q0, dtype=float)), pad))
     reach = [
@@ -509,9 +512,12 @@ def _pair_windows(
     names = blocks.zone_names()
     spans: list[list[tuple[int, float, float]]] = []
     users: list[set[int]] = [set() for _ in range(blocks.n_zones)]
+    contacts: dict[int, BoolArray] = {}
     for i, ((_t, a), cm) in enumerate(modes):
         t, q = samples[i]
-        flags = zone_contacts(cell.arms[a], q, blocks, pad)
+        flags = contacts.get(id(q))
+        if flags is None:
+            flags = contacts[id(q)] = zone_contacts(cell.arms[a], q, blocks, pad)
         dur = cm.duration
         mine: list[tuple[int, float, float]] = []
         for z in np.flatnonzero(flags.any(axis=0)):
