@@ -7,8 +7,9 @@ where ``motion_k`` turns about the unit ``axis[k]`` (revolute) or slides
 along it (prismatic). Frame 0 is the arm's base (the root link placed in the
 cell); the last frame is the tool link, ``frame[n] @ tool``.
 
-The inverse kinematics is the same Levenberg-Marquardt loop as the DH serial
-arm (:mod:`workcell.arms.serial`): damped least squares on the position and
+The inverse kinematics, :func:`chain_ik`, serves the URDF and the DH serial
+arm (:mod:`workcell.arms.serial` writes its DH rows as such a chain):
+Levenberg-Marquardt, damped least squares on the position and
 rotation-vector error with the geometric Jacobian, adaptive damping, limits
 enforced by clipping, several starts in a fixed order.
 """
