@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
 from multiarm.errors import Unreachable, ValidationError
-from multiarm.types import FloatArray, JointVector, Transform
+from multiarm.types import BoolArray, FloatArray, JointVector, Transform
+from workcell.arms._urdf_jit import chain_ik
 from workcell.arms.base import Arm
 from workcell.arms.profiles import Drive
 from workcell.arms.trajectory import Interpolation, JointTrajectory, move_segment
@@ -32,8 +33,10 @@ IK_LENGTH = 0.3
 IK_WEIGHTS: FloatArray = np.array([1.0, 1.0, 1.0, IK_LENGTH, IK_LENGTH, IK_LENGTH])
 """Weights of the (position, rotation vector) error of the numerical IK."""
 
-IkSolver = Callable[[FloatArray, FloatArray], tuple[FloatArray, float, bool]]
-"""A compiled damped least squares loop: ``(target, starts) -> (q, error, converged)``."""
+Chain = tuple[FloatArray, FloatArray, FloatArray, BoolArray, FloatArray]
+"""A serial chain for :func:`workcell.arms._urdf_jit.chain_ik`: the base
+(4, 4), the joint origins (n, 4, 4), the unit joint axes (n, 3), which joints
+are prismatic (n,) and the tool (4, 4)."""
 
 
 def rot_z(theta: FloatArray) -> FloatArray:
@@ -96,15 +99,18 @@ def numerical_ik(
     q_hint: JointVector | None,
     shoulder: FloatArray,
     max_reach: float,
-    solve: IkSolver,
+    chain: Chain,
+    iterations: int,
 ) -> JointVector:
     """The numerical IK of a serial chain (the DH serial and the URDF arm).
 
     Checks the pose, rejects a point farther than ``max_reach`` from
-    ``shoulder`` (the chain cannot reach it), then runs ``solve`` from the
-    hint (the branch choice), the home joints and :data:`IK_RESTARTS` fixed
-    pseudo-random starts (seed 12345, drawn once per joint limits), in that
-    order; the first converged start wins.
+    ``shoulder`` (the chain cannot reach it), then runs the compiled damped
+    least squares loop (:func:`workcell.arms._urdf_jit.chain_ik`, at most
+    ``iterations`` per start) from the hint (the branch choice), the home
+    joints and :data:`IK_RESTARTS` fixed pseudo-random starts (seed 12345,
+    drawn once per joint limits), in that order; the first converged start
+    wins.
 
     Raises
     ------
@@ -128,7 +134,21 @@ def numerical_ik(
     starts[0] = arm.home if q_hint is None else q_hint
     starts[1] = arm.home
     starts[2:] = _random_starts(lim.tobytes(), n)
-    q, err, ok = solve(np.ascontiguousarray(target), starts)
+    base, origins, axes, prismatic, tool = chain
+    q, err, ok = chain_ik(
+        base,
+        origins,
+        axes,
+        prismatic,
+        tool,
+        np.ascontiguousarray(lim[:, 0]),
+        np.ascontiguousarray(lim[:, 1]),
+        np.ascontiguousarray(target),
+        starts,
+        IK_WEIGHTS,
+        IK_TOL,
+        iterations,
+    )
     if not ok:
         raise Unreachable(
             f"arm {arm.name!r}: no joint vector within the limits reaches the pose "

@@ -34,10 +34,9 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from multiarm.errors import ValidationError
-from multiarm.types import BoolArray, FloatArray, JointVector, Transform
-from workcell.arms._common import IK_TOL, IK_WEIGHTS, DriveArm, numerical_ik
+from multiarm.types import FloatArray, JointVector, Transform
+from workcell.arms._common import Chain, DriveArm, numerical_ik
 from workcell.arms._kinematics_jit import dh_frames
-from workcell.arms._urdf_jit import chain_ik
 from workcell.arms.base import JointKind, LinkShape
 from workcell.arms.profiles import ServoDrive
 
@@ -262,9 +261,14 @@ class SerialArm(DriveArm):
         return out
 
     def ik(self, pose: Transform, q_hint: JointVector | None = None) -> JointVector:
-        return numerical_ik(self, pose, q_hint, self._shoulder, self._max_reach, self._solve)
+        chain = self.__dict__.get("_chain_cache")
+        if chain is None:
+            chain = self.__dict__["_chain_cache"] = self._chain()
+        return numerical_ik(
+            self, pose, q_hint, self._shoulder, self._max_reach, chain, IK_ITERATIONS
+        )
 
-    def _chain(self) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray, FloatArray]:
+    def _chain(self) -> Chain:
         """The DH table as the compiled chain of :mod:`workcell.arms._urdf_jit`:
         joint ``i``'s transform is ``motion_z(q_i) @ F_i`` with the fixed
         ``F_i = Rz(offset) Tz(d) Tx(a) Rx(alpha)`` (a turn about z, or a slide
@@ -284,25 +288,3 @@ class SerialArm(DriveArm):
         axes = np.tile([0.0, 0.0, 1.0], (n, 1))
         prism = np.array([k == "prismatic" for k in self.joint_kinds])
         return np.ascontiguousarray(self.base), origins, axes, prism, fixed[-1].copy()
-
-    def _solve(self, target: FloatArray, starts: FloatArray) -> tuple[FloatArray, float, bool]:
-        chain = self.__dict__.get("_chain_cache")
-        if chain is None:
-            chain = self.__dict__["_chain_cache"] = self._chain()
-        base, origins, axes, prism, tool = chain
-        lim = self.joint_limits
-        q, err, ok = chain_ik(
-            base,
-            origins,
-            axes,
-            prism,
-            tool,
-            np.ascontiguousarray(lim[:, 0]),
-            np.ascontiguousarray(lim[:, 1]),
-            target,
-            starts,
-            IK_WEIGHTS,
-            IK_TOL,
-            IK_ITERATIONS,
-        )
-        return q, float(err), bool(ok)

@@ -60,8 +60,8 @@ import numpy as np
 
 from multiarm.errors import FormatError, ValidationError
 from multiarm.types import FloatArray, IntArray, JointVector, Transform
-from workcell.arms._common import IK_TOL, IK_WEIGHTS, DriveArm, numerical_ik
-from workcell.arms._urdf_jit import chain_frames, chain_ik
+from workcell.arms._common import DriveArm, numerical_ik
+from workcell.arms._urdf_jit import chain_frames
 from workcell.arms.base import JointKind, LinkShape
 from workcell.arms.capsules import fit_capsule
 from workcell.arms.profiles import ServoDrive
@@ -638,26 +638,11 @@ class UrdfArm(DriveArm):
         return out
 
     def ik(self, pose: Transform, q_hint: JointVector | None = None) -> JointVector:
-        return numerical_ik(self, pose, q_hint, self._shoulder, self._max_reach, self._solve)
-
-    def _solve(self, target: FloatArray, starts: FloatArray) -> tuple[FloatArray, float, bool]:
         m = self.model
-        lim = self.joint_limits
-        q, err, ok = chain_ik(
-            self._base_c,
-            m.origins,
-            m.axes,
-            self._prism,
-            m.tool,
-            np.ascontiguousarray(lim[:, 0]),
-            np.ascontiguousarray(lim[:, 1]),
-            target,
-            starts,
-            IK_WEIGHTS,
-            IK_TOL,
-            IK_ITERATIONS,
+        chain = (self._base_c, m.origins, m.axes, self._prism, m.tool)
+        return numerical_ik(
+            self, pose, q_hint, self._shoulder, self._max_reach, chain, IK_ITERATIONS
         )
-        return q, float(err), bool(ok)
 
     def mesh_transforms(self, q: FloatArray) -> FloatArray:
         """(N, M, 4, 4) world pose of every collision mesh's frame for ``q`` (N, dof)."""
