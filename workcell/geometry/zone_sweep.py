@@ -263,21 +263,24 @@ def sample_trajectory(
     t, q = _sample(arm, traj, padding, n_grid)
     t.setflags(write=False)
     q.setflags(write=False)
+    key = id(traj)
     try:
-        traj_ref, arm_ref = weakref.ref(traj, _forget), weakref.ref(arm)
+        traj_ref = weakref.ref(traj, lambda ref: _forget(key, ref))
+        arm_ref = weakref.ref(arm)
     except TypeError:  # not weakly referenceable: not kept
         return t, q
     if entry is None or entry[0]() is not traj:
         entry = (traj_ref, [])
-        _SAMPLES[id(traj)] = entry
+        _SAMPLES[key] = entry
     entry[1].append((arm_ref, float(padding), int(n_grid), t, q))
     return t, q
 
 
-def _forget(ref: Any) -> None:
-    for key, entry in list(_SAMPLES.items()):
-        if entry[0] is ref:
-            del _SAMPLES[key]
+def _forget(key: int, ref: Any) -> None:
+    """Drop the samples of a trajectory that died (unless its id is taken anew)."""
+    entry = _SAMPLES.get(key)
+    if entry is not None and entry[0] is ref:
+        del _SAMPLES[key]
 
 
 def _sample(
