@@ -115,7 +115,8 @@ def numerical_ik(
     Raises
     ------
     ValidationError
-        When ``pose`` is not a finite (4, 4) transform.
+        When ``pose`` is not a finite (4, 4) transform, or the hint not
+        ``dof`` finite joint values.
     Unreachable
         When no start converges.
     """
@@ -130,8 +131,16 @@ def numerical_ik(
         )
     lim = np.ascontiguousarray(arm.joint_limits, dtype=float)
     n = lim.shape[0]
+    try:
+        hint = np.asarray(arm.home if q_hint is None else q_hint, dtype=float)
+    except (TypeError, ValueError):
+        hint = np.full(0, math.nan)
+    if hint.shape != (n,) or not np.isfinite(hint).all():
+        raise ValidationError(
+            f"arm {arm.name!r}: the IK hint must be {n} finite joint values, got {q_hint!r}"
+        )
     starts = np.empty((IK_RESTARTS + 2, n))
-    starts[0] = arm.home if q_hint is None else q_hint
+    starts[0] = hint
     starts[1] = arm.home
     starts[2:] = _random_starts(lim.tobytes(), n)
     base, origins, axes, prismatic, tool = chain
