@@ -122,6 +122,12 @@ class ExactRetiming:
         Configuration pairs FCL decided (after the bounding-sphere pre-test).
     padding : float
         Metres: sampling bound and growth of every shape.
+    unresolved : tuple of str
+        Tasks for which every start at or after their lower bound touches
+        another arm under the padded check (an arm parked within ``2
+        padding`` of another's path that neither can leave): they keep the
+        plan's start (or their lower bound), and the safety monitor judges
+        the real clearance. Empty when the whole plan is separated.
     """
 
     compiled: CompiledCell
@@ -131,6 +137,7 @@ class ExactRetiming:
     motion_pairs: int
     fcl_checks: int
     padding: float
+    unresolved: tuple[str, ...] = ()
 
     @property
     def makespan(self) -> float:
@@ -494,6 +501,7 @@ class _Retimer:
         self.start: list[float] = schedule.start.astype(float).tolist()
         self.waits: list[FloatArray] = [np.array(w, dtype=float) for w in schedule.waits]
         self.shapes = p.shapes
+        self.unresolved: set[int] = set()
         # the waits kept when a task drops the ones at grid borders: those at SDL borders
         grid = [grid_block(n) is not None for n in p.zone_names]
         self.sdl_border: list[BoolArray] = []
@@ -696,11 +704,13 @@ class _Retimer:
             e = s + self.length(t)
             if best is None or e < best[0] - 1e-9:
                 best = (e, s, w)
-        if best is None:
-            raise ValidationError(
-                f"task {self.p.task_names[t]!r} finds no start at which its arm keeps clear "
-                "of the others (an arm parked in its way for good)"
-            )
+        if best is None:  # every start touches: stay (the monitor judges the clearance)
+            self.waits[t] = old_w
+            self.unresolved.add(t)
+            s = max(old_s, self.lower_bound(t))
+            self.start[t] = s
+            return abs(s - old_s) > 1e-7
+        self.unresolved.discard(t)
         _, s, w = best
         self.start[t], self.waits[t] = s, w
         return abs(s - old_s) > 1e-7 or w is not old_w
@@ -813,8 +823,6 @@ def retime_exact(
     multiarm.errors.UsageError
         A bad argument, or a plan with detour costs (the detour's path is not
         the mode's trajectory).
-    multiarm.errors.ValidationError
-        A task can never start clear of an arm parked in its way.
     multiarm.errors.ScheduleError
         ``plan`` is not a valid schedule of ``compiled``.
     """
@@ -846,5 +854,12 @@ def retime_exact(
     out = r.schedule()
     validate(free, out)
     return ExactRetiming(
-        free, out, grid_makespan, passes, len(r.chk.pairs), r.chk.fcl_checks, float(padding)
+        free,
+        out,
+        grid_makespan,
+        passes,
+        len(r.chk.pairs),
+        r.chk.fcl_checks,
+        float(padding),
+        tuple(free.problem.task_names[t] for t in sorted(r.unresolved)),
     )
