@@ -81,6 +81,18 @@ def test_a_colliding_plan_is_made_safe() -> None:
     assert ex.makespan > plan.makespan  # moving the colliding tasks apart costs time
 
 
+def test_tasks_that_touch_at_every_start_keep_their_time_and_are_named(
+    grid_cc, grid_plan, exact
+) -> None:
+    # 10 cm of growth on every shape: the gantries, parked, "touch" each other's
+    # paths whatever the starts; those tasks stay put and are reported
+    ex = retime_exact(grid_cc, grid_plan, padding=0.1)
+    assert ex.unresolved and set(ex.unresolved) <= set(grid_plan.problem.task_names)
+    assert np.all(ex.schedule.end <= grid_plan.schedule.end + 1e-6)
+    assert validate(ex.compiled, ex.schedule) == pytest.approx(ex.makespan)
+    assert not exact.unresolved  # at 2 cm nothing is left
+
+
 def test_inert_grid_keeps_the_modes_and_frees_the_blocks(grid_cc, grid_plan) -> None:
     free = inert_grid(grid_cc)
     p, q = grid_cc.problem, free.problem
