@@ -108,18 +108,19 @@ class ExactRetiming:
     Attributes
     ----------
     compiled : CompiledCell
-        The cell compiled with the grid off; :attr:`schedule` is a schedule
-        of its problem (simulate it with this, not with the grid compile).
+        :func:`inert_grid` of the compile given: :attr:`schedule` is a
+        schedule of its problem (validate and simulate it with this one; the
+        grid compile would make the arms wait for the blocks again).
     schedule : scheduler.Schedule
         The same modes and task orders, re-timed.
     grid_makespan : float
         The makespan of the plan given (seconds).
     passes : int
-        Left-shift passes until no start changed.
+        Left-shift passes made (the last moved no start by more than ``settle``).
     motion_pairs : int
         Pairs of timed motions whose forbidden shifts were computed.
     fcl_checks : int
-        Configuration pairs FCL decided (after the bounding-sphere pre-test).
+        Configuration pairs FCL decided (after the box and capsule pre-tests).
     padding : float
         Metres: sampling bound and growth of every shape.
     unresolved : tuple of str
@@ -146,7 +147,7 @@ class ExactRetiming:
 
     @property
     def plan(self) -> Plan:
-        """The re-timed schedule bound to the grid-off problem."""
+        """The re-timed schedule bound to :attr:`compiled`'s problem."""
         return Plan(self.compiled.problem, self.schedule)
 
     @property
@@ -393,6 +394,9 @@ class _Checker:
                 ts.append(rel[i])
                 qs.append(q[i])
             tau, q = np.array(ts, dtype=float), np.array(qs, dtype=float)
+        if tau[-1] + shift < -1e-9:  # a travel shorter than its setup:
+            tau = np.append(tau, -shift)  # the arm then stands at the task's start
+            q = np.concatenate([q, q[-1:]])
         m = self.motions[key] = self._make(a, tau + shift, q)
         return m
 
