@@ -172,10 +172,24 @@ def measure(
 def _runs_text(m: Any) -> str:
     if "compile_runs" not in m.columns:
         return "two"
-    per = {str(c): int(g["compile_runs"].iloc[0]) for c, g in m.groupby("cell", sort=False)}
-    if len(set(per.values())) == 1:
-        return {1: "one", 2: "two"}.get(next(iter(per.values())), str(next(iter(per.values()))))
-    return ", ".join(f"{n} for {c}" for c, n in per.items())
+    by: dict[int, list[str]] = {}
+    for c, g in m.groupby("cell", sort=False):
+        by.setdefault(int(g["compile_runs"].iloc[0]), []).append(str(c))
+    if len(by) == 1:
+        n = next(iter(by))
+        return {1: "one", 2: "two"}.get(n, str(n))
+    return "; ".join(f"{n} for {', '.join(cells)}" for n, cells in sorted(by.items(), reverse=True))
+
+
+CELL_ORDER = ("supersigma", "scara4", "cell8")
+"""The order of the cells in the table and the plot (the sweep file's), whatever
+order the runs finished in."""
+
+
+def _ordered(m: Any) -> Any:
+    rank = {c: i for i, c in enumerate(CELL_ORDER)}
+    key = m["cell"].map(lambda c: rank.get(str(c), len(rank)))
+    return m.assign(_rank=key).sort_values(["_rank", "grid"], kind="stable").drop(columns="_rank")
 
 
 def _has_exact(m: Any) -> bool:
@@ -184,6 +198,7 @@ def _has_exact(m: Any) -> bool:
 
 def table(m: Any) -> str:
     """The Markdown table of the measured rows."""
+    m = _ordered(m)
     ev = ", ".join(str(int(e)) for e in sorted(set(m["evaluations"])))
     ex = _has_exact(m)
     lines = [
@@ -286,6 +301,7 @@ def plot(m: Any, path: Path) -> Path:
     with the exact re-timings and the grid-off plan as references; compile time."""
     from matplotlib.figure import Figure
 
+    m = _ordered(m)
     ex = _has_exact(m)
     fig = Figure(figsize=(9.0, 3.6), layout="constrained")
     ax_m, ax_c = fig.subplots(1, 2)
@@ -326,7 +342,8 @@ def plot(m: Any, path: Path) -> Path:
     ax_m.legend(fontsize=7)
     ax_c.set_xlabel("block side (m)")
     ax_c.set_ylabel("compile time (s)")
-    ax_c.set_title("compile time", fontsize=9)
+    ax_c.set_yscale("log")
+    ax_c.set_title("compile time (log scale)", fontsize=9)
     ax_c.legend(fontsize=7)
     for ax in (ax_m, ax_c):
         ax.grid(linewidth=0.3)
