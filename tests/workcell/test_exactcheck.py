@@ -62,6 +62,15 @@ def test_the_retiming_keeps_modes_orders_and_never_ends_a_task_later(exact, grid
     assert exact.ratio == pytest.approx(exact.makespan / grid_plan.makespan)
 
 
+@pytest.mark.parametrize("seed", [1, 2])
+def test_plans_of_other_seeds_retime_clean_and_never_later(grid_cc, seed: int) -> None:
+    # a small seeded campaign: other tree plans of the same cell (other orders)
+    plan = solve(grid_cc, "tree", seed=seed, options=TreeOptions(max_evaluations=60)).plan
+    ex = retime_exact(grid_cc, plan)
+    assert np.all(ex.schedule.end <= plan.schedule.end + 1e-6)
+    assert _monitored(ex) == pytest.approx(ex.makespan, abs=1e-6)
+
+
 def test_the_retiming_is_deterministic(grid_cc, grid_plan, exact) -> None:
     again = retime_exact(grid_cc, grid_plan.schedule)
     assert again.schedule == exact.schedule
