@@ -11,7 +11,7 @@ modes, and gives every task the earliest start at which
   shapes, :meth:`workcell.arms.Arm.shape_transforms`) standing at its start
   pose, travelling to a task (the move the coordinator sends,
   ``arm.move(q_end, q_start)``, over ``[start - travel, start)``), executing
-  the compiled mode's joint trajectory (with the plan's waits at SDL zone
+  the compiled mode's joint trajectory (with the plan's waits at its zone
   borders), and parked at the task's end pose until it leaves again,
   checked pairwise against every other arm's timeline with FCL;
 * the precedences, part releases and each arm's travel hold;
