@@ -49,6 +49,25 @@ MAX_INT = 2**62
 MAX_RUNS = 100_000
 """Most runs one sweep file may hold (instances x solver seeds x repetitions):
 a bigger grid is a typo (``repetitions = 1e9``) or weeks of work; split it."""
+# The keys a generated instance may set, with their types (sweep files).
+GENERATOR_KEYS: dict[str, type] = {
+    "precedence": float,
+    "release_fraction": float,
+    "zone_fraction": float,
+    "tool_fraction": float,
+    "setups": bool,
+    "start_zones": bool,
+    "blocking": bool,
+    "grid": int,
+    "generator": str,
+    "setup_fraction": float,
+    "flexibility": float,
+    "stay_fraction": float,
+    "shared_fraction": float,
+    "reach": int,
+    "waits": bool,
+}
+
 MAX_GENERATED = (1_000, 10_000, 1_000, 1_000)
 """Largest arms, tasks, zones and tools of a generated instance."""
 

@@ -100,6 +100,7 @@ from scheduler import REGISTRY, SOLVERS, read_fjsp
 from scheduler.generate import GENERATORS
 from workcell.cell import EXAMPLES, load_cell
 from workcell.experiments._fields import (
+    GENERATOR_KEYS,
     MAX_GENERATED,
     MAX_RUNS,
     _int,
@@ -140,23 +141,6 @@ _INSTANCE_KEYS = {
     "cell": {"kind", "family", "cells", "best_known"},
     "benchmark": {"kind", "family", "function", "path", "params", "seeds"},
     "campaign": {"kind", "family", "cells", "episodes", "batch", "seeds"},
-}
-_GENERATOR_KEYS = {
-    "precedence": float,
-    "release_fraction": float,
-    "zone_fraction": float,
-    "tool_fraction": float,
-    "setups": bool,
-    "start_zones": bool,
-    "blocking": bool,
-    "grid": int,
-    "generator": str,
-    "setup_fraction": float,
-    "flexibility": float,
-    "stay_fraction": float,
-    "shared_fraction": float,
-    "reach": int,
-    "waits": bool,
 }
 _SOLVER_KEYS = {"label", "solver", "time_limit", "seeds", "options"}
 _FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
@@ -363,7 +347,7 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
         raise w.fail(
             f"{where}.kind", f"expected one of {', '.join(map(repr, _INSTANCE_KEYS))}, got {kind!r}"
         )
-    known = _INSTANCE_KEYS[kind] | (set(_GENERATOR_KEYS) if kind == "generated" else set())
+    known = _INSTANCE_KEYS[kind] | (set(GENERATOR_KEYS) if kind == "generated" else set())
     _unknown(w, item, known, where)
     family = _str(w, item.get("family", kind), f"{where}.family")
     bk = _best_known(w, item, where)
@@ -395,7 +379,7 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
             if key not in item:
                 raise w.fail(f"{where}.{key}", "missing")
         params: dict[str, Any] = {}
-        for key, typ in _GENERATOR_KEYS.items():
+        for key, typ in GENERATOR_KEYS.items():
             if key in item:
                 v = item[key]
                 ok = isinstance(v, bool) if typ is bool else not isinstance(v, bool)
