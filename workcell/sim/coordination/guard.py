@@ -179,7 +179,8 @@ class GeometryGuard:
         # until the mover and every moving arm near it reach their next stations
         horizon = max([dur] + [o.next_stop_time() - now for o in near if o.running])
         n = max(2, math.ceil(horizon / self.dt) + 1)
-        off = np.linspace(0.0, horizon, n)
+        off = np.arange(n, dtype=float) * (horizon / (n - 1))  # np.linspace(0, horizon, n)
+        off[-1] = horizon
         times = now + off
         qa = leg.trajectory.sample(np.minimum(tau0 + off, tau1))
         a0, a1 = self._ends(mover.index, qa)
