@@ -24,9 +24,10 @@ task back to an arm it just left — unless that move beats the best schedule
 so far (aspiration), even when it is worse than the current one. After a run
 without improvement it restarts from the best schedule with a random kick.
 
-On a pure FJSP (:func:`pure_fjsp`: no zone windows, start zones, tools,
-setup times or blocking oracle, and not a re-solve) the decoded schedule is
-the longest-path schedule of the disjunctive graph, and :func:`graph_tabu`
+On a pure FJSP (:func:`pure_fjsp`: no zone windows, start zones, tools or
+blocking oracle, setup times only where they obey the triangle inequality
+(:func:`graph_setup`), and not a re-solve) the decoded schedule is the
+longest-path schedule of the disjunctive graph (setups on its arm arcs), and :func:`graph_tabu`
 runs instead: a compiled search (:mod:`scheduler.kernel._tabu_jit`) with the
 k-insertion neighbourhood of Mastrolilli and Gambardella, each move's
 makespan computed exactly, rotating through the tabu settings of
@@ -38,6 +39,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -53,8 +55,10 @@ from scheduler.setup import NoSetup
 
 __all__ = [
     "GRAPH_CONFIGS",
+    "GRAPH_SETUP_MAX_TASKS",
     "GraphConfig",
     "critical_chain",
+    "graph_setup",
     "graph_tabu",
     "pure_fjsp",
     "tabu_search",
@@ -452,9 +456,10 @@ def _kick(
 
 
 def pure_fjsp(ev: Evaluator) -> bool:
-    """Whether the evaluator's problem is a pure FJSP the graph search handles:
-    no zone windows, start zones, tools, setup times or blocking oracle, and
-    no re-solve base state or frozen tasks (releases, arm availability,
+    """Whether the evaluator's problem is an FJSP the graph search handles:
+    no zone windows, start zones, tools or blocking oracle, setup times that
+    :func:`graph_setup` accepts (none, or obeying the triangle inequality),
+    and no re-solve base state or frozen tasks (releases, arm availability,
     ``arm_lb`` and allowed modes are handled)."""
     p = ev.problem
     return (
@@ -463,9 +468,79 @@ def pure_fjsp(ev: Evaluator) -> bool:
         and not ev.frozen
         and p.n_windows == 0
         and p.n_tools == 0
-        and isinstance(p.setup, NoSetup)
         and not any(p.arm_start_zones)
+        and graph_setup(p) is not None
     )
+
+
+GRAPH_SETUP_MAX_TASKS = 600
+"""The largest problem with setup times the graph search takes (it reads a
+dense ``(A, T + 1, T)`` table and checks the triangle inequality in
+``O(A T^3)``)."""
+
+_SETUP_CACHE: OrderedDict[int, tuple[Problem, FloatArray | None]] = OrderedDict()
+
+
+def graph_setup(p: Problem) -> FloatArray | None:
+    """The setup times as the graph search reads them, or None where it cannot.
+
+    With setups the disjunctive graph gets the setup time on each arc
+    between consecutive tasks of an arm (and from the arm's initial pose to
+    its first task). The k-insertion's makespan stays exact when the setups
+    obey the triangle inequality with the task between:
+    ``s(x, y) <= s(x, v) + p(v) + s(v, y)`` (every path of the graph with
+    ``v`` taken out is then no longer than one through ``v`` put back), the
+    condition :meth:`scheduler.setup.BoundSetup.is_metric` checks.
+
+    Parameters
+    ----------
+    p : Problem
+
+    Returns
+    -------
+    ndarray or None
+        ``stp[arm, prev + 1, next]`` (row 0: from the initial pose; only the
+        entries between tasks the arm can do are filled), shape ``(0, 1, 1)``
+        without setups; None when a setup breaks the triangle inequality or
+        the problem has more than :data:`GRAPH_SETUP_MAX_TASKS` tasks.
+    """
+    if isinstance(p.setup, NoSetup):
+        return np.zeros((0, 1, 1))
+    key = id(p)
+    hit = _SETUP_CACHE.get(key)
+    if hit is not None and hit[0] is p:
+        return hit[1]
+    out: FloatArray | None = None
+    T, A = p.n_tasks, p.n_arms
+    if T <= GRAPH_SETUP_MAX_TASKS:
+        out = np.zeros((A, T + 1, T))
+        for a in range(A):
+            modes = np.flatnonzero(p.mode_arm == a)
+            if len(modes) == 0:
+                continue
+            tasks = p.mode_task[modes]
+            dur = p.mode_duration[modes]
+            rows = np.array([p.setup_row(a, int(q))[tasks] for q in (-1, *tasks.tolist())])
+            out[a, 0, tasks] = rows[0]
+            out[a, (tasks + 1)[:, None], tasks[None, :]] = rows[1:]
+            S = rows[1:].copy()
+            np.fill_diagonal(S, 0.0)
+            home = rows[0]
+            bad = False
+            for k in range(len(tasks)):
+                via = S[k][None, :] + dur[k]
+                if np.any(S[:, k : k + 1] + via + 1e-9 < S) or np.any(
+                    home > home[k] + via[0] + 1e-9
+                ):
+                    bad = True
+                    break
+            if bad:
+                out = None
+                break
+    _SETUP_CACHE[key] = (p, out)
+    while len(_SETUP_CACHE) > 8:
+        _SETUP_CACHE.popitem(last=False)
+    return out
 
 
 @dataclass(frozen=True)
@@ -526,6 +601,9 @@ class _Graph:
         self.tm_mode = np.array([m for x in modes for m in x], dtype=np.int64)
         self.tm_arm = np.ascontiguousarray(p.mode_arm[self.tm_mode], dtype=np.int64)
         self.tm_dur = np.ascontiguousarray(p.mode_duration[self.tm_mode], dtype=np.float64)
+        stp = graph_setup(p)
+        if stp is None:
+            raise InternalError(f"the graph search cannot read the setups of {p.name!r}")
         self.arrays = GraphArrays(
             self.pp,
             self.pi,
@@ -536,6 +614,7 @@ class _Graph:
             self.tm_ptr,
             self.tm_arm,
             self.tm_dur,
+            stp,
         )
         """The same arrays bundled for the compiled search."""
 

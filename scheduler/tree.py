@@ -100,7 +100,8 @@ class TreeOptions:
     limit and no work limit: the better schedule wins, and CP-SAT's proof of
     optimality ends the tree search at once (0: never)."""
     portfolio_fjsp_max_tasks: int = 40
-    """The same size rule on a pure FJSP (no zones, tools, setups), where the
+    """The same size rule on a pure FJSP (no zones or tools; setups only where
+    the graph search reads them, :func:`scheduler.tabu.graph_setup`), where the
     graph tabu search runs beside CP-SAT: there CP-SAT proves the optimum of
     the Fattahi instances up to 36 tasks within about a second."""
     fallback: bool = True

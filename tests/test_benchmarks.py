@@ -20,6 +20,8 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_kernel",
         "bench_fjsp",
         "bench_generated",
+        "bench_setups",
+        "bench_lines",
         "bench_scale",
         "bench_resolve",
         "bench_geometry",
@@ -32,6 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_small",
         "bench_grid",
         "bench_urdf",
+        "bench_policies",
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:

@@ -61,7 +61,7 @@ from typing import Any, Literal
 import numpy as np
 
 from multiarm.errors import NoFeasibleSchedule, Unreachable, UsageError, ValidationError
-from multiarm.types import FloatArray, JointVector
+from multiarm.types import BoolArray, FloatArray, JointVector
 from scheduler import MatrixSetup, Model, Problem, Setup, Window
 from scheduler.setup import BoundSetup
 from scheduler.view import ProblemView
@@ -359,20 +359,27 @@ def _compile(
         preds[waiter] = tuple(dict.fromkeys((*preds.get(waiter, ()), setter)))
     modes: list[tuple[tuple[int, int], CompiledMode]] = []
     rejected: dict[tuple[str, str], str] = {}
+    motions: dict[tuple[Any, ...], _Motion | str] = {}
     for ti, task in enumerate(ts.tasks):
         program = expand_task(task, ts.trajectories, plan)
         reasons = []
         for ai, (arm, q0) in enumerate(zip(cell.arms, cell.start, strict=True)):
             why = _lacks(task, arm)
             if why is None:
-                try:
-                    cm = _compile_mode(
-                        task, program, arm, q0, cell, shared, active, opts.linear_step
-                    )
-                except Unreachable as exc:
-                    why = str(exc)
+                # Tasks repeated for several products (the same moves and
+                # dwells) time and sweep alike on one arm: done once.
+                key = (ai, _program_key(program))
+                got = motions.get(key)
+                if got is None:
+                    try:
+                        got = _motion(program, arm, q0, cell, shared, active, opts.linear_step)
+                    except Unreachable as exc:
+                        got = str(exc)
+                    motions[key] = got
+                if isinstance(got, str):
+                    why = got
                 else:
-                    modes.append(((ti, ai), cm))
+                    modes.append(((ti, ai), _compiled_mode(task, program, arm, got)))
                     continue
             rejected[(task.id, arm.name)] = why
             reasons.append(f"{arm.name}: {why}")
@@ -483,11 +490,14 @@ def _pair_windows(
     pad = max(cell.padding, grid_padding)
     samples: list[tuple[FloatArray, FloatArray]] = []
     boxes: list[list[FloatArray]] = [[] for _ in cell.arms]
+    seen: set[int] = set()
     for (_t, a), cm in modes:
         arm = cell.arms[a]
-        t, q = sample_trajectory(arm, cm.trajectory, pad)
+        t, q = sample_trajectory(arm, cm.trajectory, pad)  # shared by modes of one motion
         samples.append((t, q))
-        boxes[a].append(capsules_box(*arm_capsules(arm, q), pad))
+        if id(q) not in seen:
+            seen.add(id(q))
+            boxes[a].append(capsules_box(*arm_capsules(arm, q), pad))
     for a, (arm, q0) in enumerate(zip(cell.arms, cell.start, strict=True)):
         boxes[a].append(capsules_box(*arm_capsules(arm, np.asarray(q0, dtype=float)), pad))
     reach = [
@@ -502,9 +512,12 @@ def _pair_windows(
     names = blocks.zone_names()
     spans: list[list[tuple[int, float, float]]] = []
     users: list[set[int]] = [set() for _ in range(blocks.n_zones)]
+    contacts: dict[int, BoolArray] = {}
     for i, ((_t, a), cm) in enumerate(modes):
         t, q = samples[i]
-        flags = zone_contacts(cell.arms[a], q, blocks, pad)
+        flags = contacts.get(id(q))
+        if flags is None:
+            flags = contacts[id(q)] = zone_contacts(cell.arms[a], q, blocks, pad)
         dur = cm.duration
         mine: list[tuple[int, float, float]] = []
         for z in np.flatnonzero(flags.any(axis=0)):
@@ -536,8 +549,36 @@ def _build(
     return problem, ordered
 
 
-def _compile_mode(
-    task: Task,
+def _program_key(program: Program) -> tuple[Any, ...]:
+    """What a program's motion depends on: its segments (flags and the task
+    name left out), the targets by value."""
+    return tuple(
+        (
+            s.kind,
+            None if s.target is None else np.asarray(s.target, dtype=float).tobytes(),
+            s.interpolation,
+            s.speed,
+            s.duration,
+            s.label,
+            s.step,
+        )
+        for s in program.segments
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class _Motion:
+    """A program timed and swept on one arm: the parts of a compiled mode
+    that do not depend on the task's name, tool or flags."""
+
+    trajectory: JointTrajectory
+    offsets: tuple[float, ...]
+    q_start: JointVector
+    q_end: JointVector
+    windows: tuple[Window, ...]
+
+
+def _motion(
     program: Program,
     arm: DriveArm,
     q0: JointVector,
@@ -545,7 +586,7 @@ def _compile_mode(
     shared: Any,
     active: Any,
     step: float,
-) -> CompiledMode:
+) -> _Motion:
     # With park="last" the task starts at its first pose and the travel there
     # is the setup. With park="home" the task is the whole round trip from
     # the arm's start joints and back, so every motion is swept for zones
@@ -570,10 +611,16 @@ def _compile_mode(
                 s, e = max(0.0, float(s)), min(dur, float(e))
                 if e > s:
                     windows.append(Window(w.zone, s, e, kind))  # type: ignore[arg-type]
-    sets = tuple((f, offsets[i]) for f, i in program.flags_set)
-    waits = tuple((f, offsets[i]) for f, i in program.flags_waited)
+    return _Motion(traj, tuple(offsets), q_first, q_end, tuple(windows))
+
+
+def _compiled_mode(task: Task, program: Program, arm: DriveArm, mo: _Motion) -> CompiledMode:
+    sets = tuple((f, mo.offsets[i]) for f, i in program.flags_set)
+    waits = tuple((f, mo.offsets[i]) for f, i in program.flags_waited)
     tools = (task.tool,) if task.tool is not None else ()
-    return CompiledMode(task.id, arm.name, traj, q_first, q_end, tuple(windows), tools, sets, waits)
+    return CompiledMode(
+        task.id, arm.name, mo.trajectory, mo.q_start, mo.q_end, mo.windows, tools, sets, waits
+    )
 
 
 class JointTravelSetup(Setup):

@@ -1,4 +1,11 @@
-"""Compiled tabu search on the disjunctive graph of a pure FJSP (no zones, tools, setups).
+"""Compiled tabu search on the disjunctive graph of a pure FJSP (no zones or tools).
+
+Setup times, where given (``GraphArrays.stp``), lie on the arcs between
+consecutive tasks of an arm and from an arm's initial pose to its first
+task; they must obey the triangle inequality with the task between
+(:func:`scheduler.tabu.graph_setup` checks it), which keeps every formula
+below exact: taking ``v`` out replaces the arcs ``x -> v -> y`` by one
+``x -> y`` that is no longer.
 
 On a problem without zones, tools, setup times or a blocking oracle, a
 schedule decoded from arm sequences is semi-active: each task starts at the
@@ -60,7 +67,9 @@ class GraphArrays(NamedTuple):
     """A pure FJSP's fixed arrays (CSR offsets ``*_ptr``/``pp``/``sp``):
     predecessors ``pp``/``pi``, successors ``sp``/``si``, releases ``rel``,
     arm availability ``avail``, and each task's allowed modes as their arm
-    ``tm_arm`` and duration ``tm_dur`` (``tm_ptr[t]..tm_ptr[t+1]``)."""
+    ``tm_arm`` and duration ``tm_dur`` (``tm_ptr[t]..tm_ptr[t+1]``), and the
+    setup times ``stp[arm, prev + 1, next]`` (row 0: from the initial pose;
+    shape ``(0, 1, 1)``: no setups)."""
 
     pp: Any
     pi: Any
@@ -71,6 +80,7 @@ class GraphArrays(NamedTuple):
     tm_ptr: Any
     tm_arm: Any
     tm_dur: Any
+    stp: Any
 
 
 class SearchArrays(NamedTuple):
@@ -139,11 +149,12 @@ def _links(seq, seq_n, mprev, mnext):
 
 
 @njit(cache=True)
-def _heads_full(pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext, skip, head, order, indeg):
+def _heads_full(pp, pi, sp, si, rel, avail, stp, arm, dur, mprev, mnext, skip, head, order, indeg):
     """Heads (earliest starts) of the graph without task ``skip`` (-1: none) in
     topological order (Kahn's algorithm); returns how many tasks were ordered
-    (fewer: a cycle)."""
+    (fewer: a cycle). ``stp`` holds the setup times (empty: none)."""
     T = len(rel)
+    hs = stp.shape[0] > 0
     n = 0
     for t in range(T):
         if t == skip:
@@ -169,10 +180,17 @@ def _heads_full(pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext, skip, head, 
                 h = head[q] + dur[q]
         q = mprev[t]
         if q >= 0:
-            if head[q] + dur[q] > h:
-                h = head[q] + dur[q]
-        elif avail[arm[t]] > h:
-            h = avail[arm[t]]
+            e = head[q] + dur[q]
+            if hs:
+                e += stp[arm[t], q + 1, t]
+            if e > h:
+                h = e
+        else:
+            e = avail[arm[t]]
+            if hs:
+                e += stp[arm[t], 0, t]
+            if e > h:
+                h = e
         head[t] = h
         for j in range(sp[t], sp[t + 1]):
             x = si[j]
@@ -192,8 +210,9 @@ def _heads_full(pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext, skip, head, 
 
 
 @njit(cache=True)
-def _tails(sp, si, dur, mnext, skip, order, n, tail):
+def _tails(sp, si, stp, arm, dur, mnext, skip, order, n, tail):
     """Tails (longest path after each end) over the first ``n`` of ``order``."""
+    hs = stp.shape[0] > 0
     for k in range(n - 1, -1, -1):
         t = order[k]
         best = 0.0
@@ -202,8 +221,12 @@ def _tails(sp, si, dur, mnext, skip, order, n, tail):
             if x != skip and dur[x] + tail[x] > best:
                 best = dur[x] + tail[x]
         x = mnext[t]
-        if x >= 0 and dur[x] + tail[x] > best:
-            best = dur[x] + tail[x]
+        if x >= 0:
+            e = dur[x] + tail[x]
+            if hs:
+                e += stp[arm[t], t + 1, x]
+            if e > best:
+                best = e
         tail[t] = best
 
 
@@ -211,6 +234,7 @@ def _tails(sp, si, dur, mnext, skip, order, n, tail):
 def graph_makespan(g, arm, dur, seq, seq_n):
     """The longest path of the graph of arm sequences ``seq`` (-1.0: a cycle)."""
     pp, pi, sp, si, rel, avail = g.pp, g.pi, g.sp, g.si, g.rel, g.avail
+    stp = g.stp
     T = len(rel)
     mprev = np.empty(T, dtype=np.int64)
     mnext = np.empty(T, dtype=np.int64)
@@ -218,7 +242,7 @@ def graph_makespan(g, arm, dur, seq, seq_n):
     head = np.zeros(T)
     order = np.empty(T, dtype=np.int64)
     indeg = np.empty(T, dtype=np.int64)
-    n = _heads_full(pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext, -1, head, order, indeg)
+    n = _heads_full(pp, pi, sp, si, rel, avail, stp, arm, dur, mprev, mnext, -1, head, order, indeg)
     if n < T:
         return -1.0
     c = 0.0
@@ -230,14 +254,14 @@ def graph_makespan(g, arm, dur, seq, seq_n):
 
 @njit(cache=True)
 def _minus(
-    v, pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext, head, tail, order, indeg, desc, anc
+    v, pp, pi, sp, si, rel, avail, stp, arm, dur, mprev, mnext, head, tail, order, indeg, desc, anc
 ):
     """Heads, tails, makespan of G- (v taken out of its arm), and which tasks
     descend from v's job successors (``desc``) or lead to its job
     predecessors (``anc``). ``mprev``/``mnext`` must already bypass v."""
     T = len(rel)
-    n = _heads_full(pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext, v, head, order, indeg)
-    _tails(sp, si, dur, mnext, v, order, n, tail)
+    n = _heads_full(pp, pi, sp, si, rel, avail, stp, arm, dur, mprev, mnext, v, head, order, indeg)
+    _tails(sp, si, stp, arm, dur, mnext, v, order, n, tail)
     desc[:] = False
     anc[:] = False
     for j in range(sp[v], sp[v + 1]):
@@ -278,6 +302,7 @@ def _minus_fast(
     si,
     rel,
     avail,
+    stp,
     arm,
     dur,
     mprev,
@@ -297,6 +322,7 @@ def _minus_fast(
     the whole graph: a task before v in that order keeps its head, one after
     it its tail, so each is recomputed on one side of v only."""
     n = len(rel)
+    hs = stp.shape[0] > 0
     pv = gpos[v]
     h2[:] = head
     t2[:] = tail
@@ -320,12 +346,19 @@ def _minus_fast(
                     d = True
         q = mprev[t]
         if q >= 0:
-            if h2[q] + dur[q] > h:
-                h = h2[q] + dur[q]
+            e = h2[q] + dur[q]
+            if hs:
+                e += stp[arm[t], q + 1, t]
+            if e > h:
+                h = e
             if desc[q]:
                 d = True
-        elif avail[arm[t]] > h:
-            h = avail[arm[t]]
+        else:
+            e = avail[arm[t]]
+            if hs:
+                e += stp[arm[t], 0, t]
+            if e > h:
+                h = e
         h2[t] = h
         desc[t] = d
         if h + dur[t] > cm:
@@ -343,8 +376,11 @@ def _minus_fast(
                     a = True
         x = mnext[t]
         if x >= 0:
-            if dur[x] + t2[x] > b:
-                b = dur[x] + t2[x]
+            e = dur[x] + t2[x]
+            if hs:
+                e += stp[arm[t], t + 1, x]
+            if e > b:
+                b = e
             if anc[x]:
                 a = True
         t2[t] = b
@@ -424,6 +460,8 @@ def tabu_run(g, state, iters, tenure_lo, tenure_span, patience, kick, style, ran
     share ``tenure_span / 10`` of that. Returns the iterations run.
     """
     pp, pi, sp, si, rel, avail = g.pp, g.pi, g.sp, g.si, g.rel, g.avail
+    stp = g.stp
+    hs = stp.shape[0] > 0
     tm_ptr, tm_arm, tm_dur = g.tm_ptr, g.tm_arm, g.tm_dur
     choice, seq, seq_n = state.choice, state.seq, state.seq_n
     b_choice, b_seq, b_seq_n = state.b_choice, state.b_seq, state.b_seq_n
@@ -467,8 +505,10 @@ def tabu_run(g, state, iters, tenure_lo, tenure_span, patience, kick, style, ran
         ctl[0] = it
         done += 1
         _links(seq, seq_n, mprev, mnext)
-        n = _heads_full(pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext, -1, head, order, indeg)
-        _tails(sp, si, dur, mnext, -1, order, n, tail)
+        n = _heads_full(
+            pp, pi, sp, si, rel, avail, stp, arm, dur, mprev, mnext, -1, head, order, indeg
+        )
+        _tails(sp, si, stp, arm, dur, mnext, -1, order, n, tail)
         cmax = 0.0
         for k in range(n):
             t = order[k]
@@ -497,7 +537,7 @@ def tabu_run(g, state, iters, tenure_lo, tenure_span, patience, kick, style, ran
                 p0 = mprev[v]
                 _unlink(v, mprev, mnext)
                 cm = _minus_fast(
-                    v, pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext,
+                    v, pp, pi, sp, si, rel, avail, stp, arm, dur, mprev, mnext,
                     head, tail, order, gpos, pm, h2, t2, desc, anc,
                 )  # fmt: skip
                 rj = rel[v]
@@ -530,13 +570,22 @@ def tabu_run(g, state, iters, tenure_lo, tenure_span, patience, kick, style, ran
                             continue  # where it is now
                         r = rj
                         if pre >= 0:
-                            if h2[pre] + dur[pre] > r:
-                                r = h2[pre] + dur[pre]
-                        elif avail[k] > r:
-                            r = avail[k]
+                            e = h2[pre] + dur[pre]
+                            if hs:
+                                e += stp[k, pre + 1, v]
+                        else:
+                            e = avail[k]
+                            if hs:
+                                e += stp[k, 0, v]
+                        if e > r:
+                            r = e
                         q = qj
-                        if post >= 0 and dur[post] + t2[post] > q:
-                            q = dur[post] + t2[post]
+                        if post >= 0:
+                            e = dur[post] + t2[post]
+                            if hs:
+                                e += stp[k, v + 1, post]
+                            if e > q:
+                                q = e
                         est = r + pv + q
                         mk = est if est > cm else cm
                         if style == 0:
@@ -602,7 +651,21 @@ def tabu_run(g, state, iters, tenure_lo, tenure_span, patience, kick, style, ran
                     )
                     _links(seq, seq_n, mprev, mnext)
                     _heads_full(
-                        pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext, -1, h2, order2, indeg
+                        pp,
+                        pi,
+                        sp,
+                        si,
+                        rel,
+                        avail,
+                        stp,
+                        arm,
+                        dur,
+                        mprev,
+                        mnext,
+                        -1,
+                        h2,
+                        order2,
+                        indeg,
                     )
                     c1 = 0.0
                     s1 = 0.0
@@ -678,6 +741,7 @@ def tabu_run(g, state, iters, tenure_lo, tenure_span, patience, kick, style, ran
                     si,
                     rel,
                     avail,
+                    stp,
                     arm,
                     dur,
                     mprev,
@@ -726,6 +790,8 @@ def all_moves(g, choice, seq, seq_n, fast):
     without the task as the search does (:func:`_minus_fast`), else from
     scratch (:func:`_minus`)."""
     pp, pi, sp, si, rel, avail = g.pp, g.pi, g.sp, g.si, g.rel, g.avail
+    stp = g.stp
+    hs = stp.shape[0] > 0
     tm_ptr, tm_arm, tm_dur = g.tm_ptr, g.tm_arm, g.tm_dur
     T = len(rel)
     arm = np.empty(T, dtype=np.int64)
@@ -748,8 +814,8 @@ def all_moves(g, choice, seq, seq_n, fast):
     pm = np.empty(T)
     order2 = np.empty(T, dtype=np.int64)
     _links(seq, seq_n, mprev, mnext)
-    n = _heads_full(pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext, -1, head, order, indeg)
-    _tails(sp, si, dur, mnext, -1, order, n, tail)
+    n = _heads_full(pp, pi, sp, si, rel, avail, stp, arm, dur, mprev, mnext, -1, head, order, indeg)
+    _tails(sp, si, stp, arm, dur, mnext, -1, order, n, tail)
     cmax = 0.0
     for k in range(n):
         t = order[k]
@@ -766,12 +832,12 @@ def all_moves(g, choice, seq, seq_n, fast):
         _unlink(v, mprev, mnext)
         if fast:
             cm = _minus_fast(
-                v, pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext,
+                v, pp, pi, sp, si, rel, avail, stp, arm, dur, mprev, mnext,
                 head, tail, order, gpos, pm, h2, t2, desc, anc,
             )  # fmt: skip
         else:
             cm = _minus(
-                v, pp, pi, sp, si, rel, avail, arm, dur, mprev, mnext,
+                v, pp, pi, sp, si, rel, avail, stp, arm, dur, mprev, mnext,
                 h2, t2, order2, indeg, desc, anc,
             )  # fmt: skip
         rj = rel[v]
@@ -804,13 +870,22 @@ def all_moves(g, choice, seq, seq_n, fast):
                     continue
                 r = rj
                 if pre >= 0:
-                    if h2[pre] + dur[pre] > r:
-                        r = h2[pre] + dur[pre]
-                elif avail[k] > r:
-                    r = avail[k]
+                    e = h2[pre] + dur[pre]
+                    if hs:
+                        e += stp[k, pre + 1, v]
+                else:
+                    e = avail[k]
+                    if hs:
+                        e += stp[k, 0, v]
+                if e > r:
+                    r = e
                 q = qj
-                if post >= 0 and dur[post] + t2[post] > q:
-                    q = dur[post] + t2[post]
+                if post >= 0:
+                    e = dur[post] + t2[post]
+                    if hs:
+                        e += stp[k, v + 1, post]
+                    if e > q:
+                        q = e
                 est = r + pv + q
                 rows.append((float(v), float(c), float(k), float(i), max(est, cm)))
         _relink(v, mprev, mnext)

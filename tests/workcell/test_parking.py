@@ -144,21 +144,66 @@ def test_other_detour_seeds_tell_the_same_story(compiled: CompiledCell, seed: in
     assert c.detours >= 1 and c.makespan < c.makespan_without
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="With the space grid on, the simulated coordinator does not execute the "
-    "planned detour: it plans its alternative trajectory from the arm's current "
-    "station to the next one (workcell/sim/coordination/geometric.py, try_detour), and "
-    "the grid puts a station (a block border) inside the stretch of the swing that "
-    "touches the parked arm, so plan_detour answers 'goal_in_collision' and the arm "
-    "waits for the parked arm to leave instead. The oracle plans from the knot before "
-    "the contact to the knot after it.",
-)
 def test_with_the_space_grid_the_simulation_executes_the_detour(
     compiled: CompiledCell,
 ) -> None:
+    """With the space grid on, zone borders (stations of the task's leg) fall
+    inside the stretch of ``sa``'s swing that touches the parked ``sb``. The
+    coordinator used to plan its detour to the next station, which touches
+    ``sb`` (``goal_in_collision``), so ``sa`` waited for ``sb`` to leave. Now
+    the detour runs over the whole contact stretch, past those stations (as
+    the compile's oracle plans it, knot before the contact to knot after),
+    holding their zones: it is executed, every task is done, the live
+    monitor (collisions and zone invariants) stays quiet."""
     cc = compile_cell(compiled.cell, options=replace(compiled.options, grid=0.3))
+    p = cc.problem
     plan = _tree(cc).schedule
     assert plan is not None and plan_detours(cc, plan) == {"deliver1": 1}  # planned ...
-    result = simulate(cc, plan, seed=0)
-    assert result.metrics.detours >= 1  # ... but not executed
+    result = simulate(cc, plan, seed=0)  # the live monitor raises on a contact
+    m = result.metrics
+    assert m.detours >= 1  # ... and executed
+    assert m.summary()["failed_tasks"] == 0 and m.done_tasks == p.n_tasks
+    assert result.safety is not None and result.safety.samples > 0
+    assert not result.trace.of_kind("monitor")
+    (event,) = result.trace.of_kind("detour")
+    assert event.arm == "sa" and event.task == "deliver1"
+    assert "alternative trajectory around arm(s) 'sb'" in event.detail
+    assert "station(s) to offset" in event.detail  # past the borders in the contact
+    # the zones of the borders it passed were reserved and given back as planned:
+    # every exclusive zone of deliver1's mode has its reservation in the run
+    mode = int(plan.mode[p.task_names.index("deliver1")])
+    zones = {p.zone_names[r] for r, _s, _e in p.shapes[mode].exclusive}
+    res = result.reservations_frame()
+    mine = res[(res["task"] == "deliver1") & (res["arm"] == "sa")]
+    assert zones <= set(mine["resource"])
+    assert len(mine) >= len(p.shapes[mode].exclusive)
+    # the detour leg ran in the task, between its start and its end
+    tf = result.tasks_frame().set_index("task")
+    assert tf.loc["deliver1", "start"] < event.time < tf.loc["deliver1", "end"]
+
+
+def test_without_detours_the_arm_waits_for_the_parked_arm(compiled: CompiledCell) -> None:
+    """``SimOptions(detours=False)`` (the ablation): the coordinator plans no
+    alternative trajectory; ``sa`` waits for ``sb`` to leave (or ``sb`` backs
+    off), later than with the detour, and every task is still done."""
+    plan = _tree(compiled).schedule
+    assert plan is not None
+    with_detour = simulate(compiled, plan, seed=0, options=SimOptions(monitor=False))
+    without = simulate(compiled, plan, seed=0, options=SimOptions(monitor=False, detours=False))
+    assert not [e for e in without.trace.of_kind("detour") if "alternative" in e.detail]
+    assert without.metrics.done_tasks == compiled.problem.n_tasks
+    assert without.metrics.executed_makespan > with_detour.metrics.executed_makespan
+
+
+@pytest.mark.parametrize(
+    ("field", "bad", "match"),
+    [
+        ("detours", 1, "SimOptions.detours must be True or False"),
+        ("detour_checks", 0, r"SimOptions.detour_checks must be an integer in \[1, 1e\+07\]"),
+        ("detour_checks", 2.5, "SimOptions.detour_checks must be an integer"),
+        ("guard_answer", "sb", "SimOptions.guard_answer must be None or a callable"),
+    ],
+)
+def test_the_detour_options_are_checked_by_field(field: str, bad: object, match: str) -> None:
+    with pytest.raises(UsageError, match=match):
+        SimOptions(**{field: bad})  # type: ignore[arg-type]

@@ -116,6 +116,24 @@ def test_ik_refuses_a_point_out_of_reach(arms: dict[str, UrdfArm]) -> None:
         arm.ik(far)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_ik_names_the_arm_for_a_bad_hint(arms: dict[str, UrdfArm], seed: int) -> None:
+    """The shared IK of the URDF and the DH serial arm: a hint of the wrong
+    length, not finite, or not numbers is refused naming the arm."""
+    from workcell.arms import SerialArm
+
+    rng = np.random.default_rng(seed)
+    for arm in (arms["panda"], SerialArm.example_6dof("dh")):
+        q = arm.home + rng.normal(0, 0.05, arm.dof)
+        pose = arm.fk(q[None])[0]
+        np.testing.assert_allclose(arm.fk(arm.ik(pose, q)[None])[0], pose, atol=1e-8)
+        bad_nan = q.copy()
+        bad_nan[rng.integers(arm.dof)] = np.nan
+        for hint in (q[: 1 + rng.integers(arm.dof - 1)], bad_nan, ["x"] * arm.dof, [q, q]):
+            with pytest.raises(ValidationError, match=f"arm {arm.name!r}: the IK hint"):
+                arm.ik(pose, hint)
+
+
 def test_limits_and_velocities_come_from_the_urdf(arms: dict[str, UrdfArm]) -> None:
     panda = arms["panda"]
     assert panda.dof == 7

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from multiarm.errors import Unreachable, ValidationError
-from multiarm.types import FloatArray, JointVector, Transform
+from multiarm.types import BoolArray, FloatArray, JointVector, Transform
+from workcell.arms._urdf_jit import chain_ik
 from workcell.arms.base import Arm
 from workcell.arms.profiles import Drive
 from workcell.arms.trajectory import Interpolation, JointTrajectory, move_segment
@@ -18,6 +20,23 @@ ORIENT_TOL = 1e-6
 
 FLIP_X: Transform = np.diag([1.0, -1.0, -1.0, 1.0])
 """A half turn about x: the flange of a gantry or SCARA points its tool (z) down."""
+
+IK_TOL = 1e-9
+"""Numerical IK convergence: position error (metres) and orientation error (radians)."""
+
+IK_RESTARTS = 16
+"""Pseudo-random starts (fixed seed) tried after the hint and the home pose."""
+
+IK_LENGTH = 0.3
+"""Metres per radian weighing the orientation error against the position error."""
+
+IK_WEIGHTS: FloatArray = np.array([1.0, 1.0, 1.0, IK_LENGTH, IK_LENGTH, IK_LENGTH])
+"""Weights of the (position, rotation vector) error of the numerical IK."""
+
+Chain = tuple[FloatArray, FloatArray, FloatArray, BoolArray, FloatArray]
+"""A serial chain for :func:`workcell.arms._urdf_jit.chain_ik`: the base
+(4, 4), the joint origins (n, 4, 4), the unit joint axes (n, 3), which joints
+are prismatic (n,) and the tool (4, 4)."""
 
 
 def rot_z(theta: FloatArray) -> FloatArray:
@@ -62,6 +81,90 @@ def vertical_tool_yaw(local: Transform, arm: str) -> float:
             f"{math.degrees(tilt):.3g} degrees"
         )
     return math.atan2(float(local[1, 0]), float(local[0, 0]))
+
+
+@functools.lru_cache(maxsize=64)
+def _random_starts(limits: bytes, n: int) -> FloatArray:
+    lim = np.frombuffer(limits, dtype=float).reshape(n, 2)
+    lo, hi = lim[:, 0], lim[:, 1]
+    rng = np.random.default_rng(12345)
+    out: FloatArray = lo + (hi - lo) * rng.random((IK_RESTARTS, n))
+    out.setflags(write=False)
+    return out
+
+
+def numerical_ik(
+    arm: Arm,
+    pose: Transform,
+    q_hint: JointVector | None,
+    shoulder: FloatArray,
+    max_reach: float,
+    chain: Chain,
+    iterations: int,
+) -> JointVector:
+    """The numerical IK of a serial chain (the DH serial and the URDF arm).
+
+    Checks the pose, rejects a point farther than ``max_reach`` from
+    ``shoulder`` (the chain cannot reach it), then runs the compiled damped
+    least squares loop (:func:`workcell.arms._urdf_jit.chain_ik`, at most
+    ``iterations`` per start) from the hint (the branch choice), the home
+    joints and :data:`IK_RESTARTS` fixed pseudo-random starts (seed 12345,
+    drawn once per joint limits), in that order; the first converged start
+    wins.
+
+    Raises
+    ------
+    ValidationError
+        When ``pose`` is not a finite (4, 4) transform, or the hint not
+        ``dof`` finite joint values.
+    Unreachable
+        When no start converges.
+    """
+    target = np.asarray(pose, dtype=float)
+    if target.shape != (4, 4) or not np.isfinite(target).all():
+        raise ValidationError(f"arm {arm.name!r}: a pose must be a finite (4, 4) transform")
+    dist = math.dist(target[:3, 3].tolist(), shoulder.tolist())
+    if dist > max_reach:
+        raise Unreachable(
+            f"arm {arm.name!r}: the point is {dist:.4g} m from the shoulder, beyond the "
+            f"reach {max_reach:.4g} m"
+        )
+    lim = np.ascontiguousarray(arm.joint_limits, dtype=float)
+    n = lim.shape[0]
+    try:
+        hint = np.asarray(arm.home if q_hint is None else q_hint, dtype=float)
+    except (TypeError, ValueError):
+        hint = np.full(0, math.nan)
+    if hint.shape != (n,) or not np.isfinite(hint).all():
+        raise ValidationError(
+            f"arm {arm.name!r}: the IK hint must be {n} finite joint values, got {q_hint!r}"
+        )
+    starts = np.empty((IK_RESTARTS + 2, n))
+    starts[0] = hint
+    starts[1] = arm.home
+    starts[2:] = _random_starts(lim.tobytes(), n)
+    base, origins, axes, prismatic, tool = chain
+    q, err, ok = chain_ik(
+        base,
+        origins,
+        axes,
+        prismatic,
+        tool,
+        np.ascontiguousarray(lim[:, 0]),
+        np.ascontiguousarray(lim[:, 1]),
+        np.ascontiguousarray(target),
+        starts,
+        IK_WEIGHTS,
+        IK_TOL,
+        iterations,
+    )
+    if not ok:
+        raise Unreachable(
+            f"arm {arm.name!r}: no joint vector within the limits reaches the pose "
+            f"(best error {err:.3g} after {len(starts)} starts)"
+        )
+    out: FloatArray = np.clip(q, lim[:, 0], lim[:, 1])
+    return out
 
 
 class DriveArm(Arm):

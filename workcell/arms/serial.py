@@ -11,8 +11,10 @@ The inverse kinematics is Levenberg-Marquardt (damped least squares with
 adaptive damping) on the position and orientation (rotation vector) error
 with the geometric Jacobian, started from the hint, then the home pose, then
 fixed pseudo-random starts (deterministic), joint limits enforced by
-clipping at every step; the loop is compiled with numba. Points beyond the
-arm's reach from its shoulder are refused at once.
+clipping at every step. The loop is the compiled one of the URDF arm
+(:func:`workcell.arms._urdf_jit.chain_ik`, the DH rows written as joint
+origins about z) behind the shared :func:`workcell.arms._common.numerical_ik`.
+Points beyond the arm's reach from its shoulder are refused at once.
 
 Examples
 --------
@@ -30,28 +32,18 @@ import math
 from collections.abc import Iterable, Sequence
 
 import numpy as np
-from numba import njit
 
-from multiarm.errors import Unreachable, ValidationError
+from multiarm.errors import ValidationError
 from multiarm.types import FloatArray, JointVector, Transform
-from workcell.arms._common import DriveArm
+from workcell.arms._common import Chain, DriveArm, numerical_ik
 from workcell.arms._kinematics_jit import dh_frames
 from workcell.arms.base import JointKind, LinkShape
 from workcell.arms.profiles import ServoDrive
 
 __all__ = ["SerialArm"]
 
-IK_TOL = 1e-9
-"""IK convergence: position error (metres) and orientation error (radians)."""
-
-IK_RESTARTS = 16
-"""Pseudo-random starts (fixed seed) tried after the hint and the home pose."""
-
 IK_ITERATIONS = 100
 """Levenberg-Marquardt iterations per start."""
-
-IK_LENGTH = 0.3
-"""Metres per radian weighing the orientation error against the position error."""
 
 
 def _capsule_between(name: str, frame: int, p: FloatArray, r: float) -> LinkShape | None:
@@ -269,130 +261,30 @@ class SerialArm(DriveArm):
         return out
 
     def ik(self, pose: Transform, q_hint: JointVector | None = None) -> JointVector:
-        target = np.asarray(pose, dtype=float)
-        if target.shape != (4, 4) or not np.all(np.isfinite(target)):
-            raise ValidationError(f"arm {self.name!r}: a pose must be a finite (4, 4) transform")
-        lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
-        n = len(self.dh)
-        dist = float(np.linalg.norm(target[:3, 3] - self._shoulder))
-        if dist > self._max_reach:
-            raise Unreachable(
-                f"arm {self.name!r}: the point is {dist:.4g} m from the shoulder, beyond the "
-                f"reach {self._max_reach:.4g} m"
-            )
-        first = self.home if q_hint is None else np.asarray(q_hint, dtype=float)
-        rng = np.random.default_rng(12345)
-        starts = np.vstack([first, self.home, lo + (hi - lo) * rng.random((IK_RESTARTS, n))])
-        w = np.array([1.0, 1.0, 1.0, IK_LENGTH, IK_LENGTH, IK_LENGTH])
-        prism = np.array([k == "prismatic" for k in self.joint_kinds])
-        q, err, ok = _ik_lm(
-            self.dh, prism, lo, hi, self.base, target, starts, w, IK_TOL, IK_ITERATIONS
+        chain = self.__dict__.get("_chain_cache")
+        if chain is None:
+            chain = self.__dict__["_chain_cache"] = self._chain()
+        return numerical_ik(
+            self, pose, q_hint, self._shoulder, self._max_reach, chain, IK_ITERATIONS
         )
-        if not ok:
-            raise Unreachable(
-                f"arm {self.name!r}: no joint vector within the limits reaches the pose "
-                f"(best error {err:.3g} after {len(starts)} starts)"
-            )
-        out: FloatArray = np.clip(q, lo, hi)
-        return out
 
-
-# ------------------------------------------------------------------ numba IK
-
-
-@njit(cache=True)
-def _chain(dh, prism, base, q):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    n = dh.shape[0]
-    fr = np.empty((n + 1, 4, 4))
-    fr[0] = base
-    for i in range(n):
-        a, alpha, d, off = dh[i, 0], dh[i, 1], dh[i, 2], dh[i, 3]
-        th = off + (0.0 if prism[i] else q[i])
-        dd = d + (q[i] if prism[i] else 0.0)
-        ct, st, ca, sa = np.cos(th), np.sin(th), np.cos(alpha), np.sin(alpha)
-        t = np.zeros((4, 4))
-        t[0, 0], t[0, 1], t[0, 2], t[0, 3] = ct, -st * ca, st * sa, a * ct
-        t[1, 0], t[1, 1], t[1, 2], t[1, 3] = st, ct * ca, -ct * sa, a * st
-        t[2, 1], t[2, 2], t[2, 3] = sa, ca, dd
-        t[3, 3] = 1.0
-        fr[i + 1] = fr[i] @ t
-    return fr
-
-
-@njit(cache=True)
-def _err(fr, target):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    cur = fr[fr.shape[0] - 1]
-    e = np.empty(6)
-    for k in range(3):
-        e[k] = target[k, 3] - cur[k, 3]
-    r = np.ascontiguousarray(target[:3, :3]) @ np.ascontiguousarray(cur[:3, :3].T)
-    c = (r[0, 0] + r[1, 1] + r[2, 2] - 1.0) / 2.0
-    c = min(1.0, max(-1.0, c))
-    ang = np.arccos(c)
-    wx, wy, wz = r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]
-    if ang < 1e-9:
-        e[3], e[4], e[5] = wx / 2, wy / 2, wz / 2
-    elif np.pi - ang < 1e-6:
-        b = (r + np.eye(3)) / 2.0
-        k = 0
-        for i in range(3):
-            if b[i, i] > b[k, k]:
-                k = i
-        ax = b[k] / np.sqrt(max(b[k, k], 1e-300))
-        ax = ax / np.sqrt(ax[0] ** 2 + ax[1] ** 2 + ax[2] ** 2)
-        e[3], e[4], e[5] = ax[0] * ang, ax[1] * ang, ax[2] * ang
-    else:
-        f = ang / (2.0 * np.sin(ang))
-        e[3], e[4], e[5] = wx * f, wy * f, wz * f
-    return e
-
-
-@njit(cache=True)
-def _ik_lm(dh, prism, lo, hi, base, target, starts, w, tol, iters):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    n = dh.shape[0]
-    best_err = np.inf
-    best_q = starts[0].copy()
-    for s in range(starts.shape[0]):
-        q = np.minimum(np.maximum(starts[s].copy(), lo), hi)
-        fr = _chain(dh, prism, base, q)
-        e = _err(fr, target)
-        err = np.sqrt(np.sum((e * w) ** 2))
-        lam = 1e-2
-        for _ in range(iters):
-            if np.sqrt(np.sum(e[:3] ** 2)) < tol and np.sqrt(np.sum(e[3:] ** 2)) < tol:
-                return q, 0.0, True
-            jac = np.zeros((6, n))
-            pe = fr[n, :3, 3]
-            for i in range(n):
-                z = fr[i, :3, 2]
-                if prism[i]:
-                    jac[0, i], jac[1, i], jac[2, i] = z[0], z[1], z[2]
-                else:
-                    r = pe - fr[i, :3, 3]
-                    jac[0, i] = z[1] * r[2] - z[2] * r[1]
-                    jac[1, i] = z[2] * r[0] - z[0] * r[2]
-                    jac[2, i] = z[0] * r[1] - z[1] * r[0]
-                    jac[3, i], jac[4, i], jac[5, i] = z[0], z[1], z[2]
-            for k in range(6):
-                jac[k] *= w[k]
-            ew = e * w
-            jj = jac @ jac.T
-            moved = False
-            for _t in range(8):
-                step = jac.T @ np.linalg.solve(jj + lam * np.eye(6), ew)
-                q_new = np.minimum(np.maximum(q + step, lo), hi)
-                fr_new = _chain(dh, prism, base, q_new)
-                e_new = _err(fr_new, target)
-                err_new = np.sqrt(np.sum((e_new * w) ** 2))
-                if err_new < err:
-                    q, e, fr, err = q_new, e_new, fr_new, err_new
-                    lam = max(lam / 3.0, 1e-9)
-                    moved = True
-                    break
-                lam *= 4.0
-            if not moved:
-                break
-        if err < best_err:
-            best_err = err
-            best_q = q
-    return best_q, best_err, False
+    def _chain(self) -> Chain:
+        """The DH table as the compiled chain of :mod:`workcell.arms._urdf_jit`:
+        joint ``i``'s transform is ``motion_z(q_i) @ F_i`` with the fixed
+        ``F_i = Rz(offset) Tz(d) Tx(a) Rx(alpha)`` (a turn about z, or a slide
+        along z, commutes with ``Rz(offset) Tz(d)``), so each ``F_i`` is the
+        next joint's origin and the last one the tool: the same product."""
+        n = len(self.dh)
+        fixed = np.zeros((n, 4, 4))
+        for i, (a, alpha, d, off) in enumerate(self.dh.tolist()):
+            ct, st, ca, sa = math.cos(off), math.sin(off), math.cos(alpha), math.sin(alpha)
+            fixed[i] = [
+                [ct, -st * ca, st * sa, a * ct],
+                [st, ct * ca, -ct * sa, a * st],
+                [0.0, sa, ca, d],
+                [0.0, 0.0, 0.0, 1.0],
+            ]
+        origins = np.concatenate([np.eye(4)[None], fixed[:-1]])
+        axes = np.tile([0.0, 0.0, 1.0], (n, 1))
+        prism = np.array([k == "prismatic" for k in self.joint_kinds])
+        return np.ascontiguousarray(self.base), origins, axes, prism, fixed[-1].copy()

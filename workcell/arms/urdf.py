@@ -58,10 +58,10 @@ from typing import Any
 
 import numpy as np
 
-from multiarm.errors import FormatError, Unreachable, ValidationError
+from multiarm.errors import FormatError, ValidationError
 from multiarm.types import FloatArray, IntArray, JointVector, Transform
-from workcell.arms._common import DriveArm
-from workcell.arms._urdf_jit import chain_frames, chain_ik
+from workcell.arms._common import DriveArm, numerical_ik
+from workcell.arms._urdf_jit import chain_frames
 from workcell.arms.base import JointKind, LinkShape
 from workcell.arms.capsules import fit_capsule
 from workcell.arms.profiles import ServoDrive
@@ -82,20 +82,10 @@ UR5 = "package:example-robot-data/robots/ur_description/urdf/ur5_robot.urdf"
 PANDA = "package:example-robot-data/robots/panda_description/urdf/panda.urdf"
 """The Franka Emika Panda (with its hand) of the ``example-robot-data`` distribution."""
 
-IK_TOL = 1e-9
-"""IK convergence: position error (metres) and orientation error (radians)."""
-
-IK_RESTARTS = 16
-"""Pseudo-random starts (fixed seed) tried after the hint and the home pose."""
-
 IK_ITERATIONS = 400
 """Levenberg-Marquardt iterations per start (a converging start stops early).
 At 100, 2 of 300 seeded random Panda poses near its joint limits stalled
 short of the tolerance (tests/workcell/test_urdf.py); at 400, none."""
-
-IK_LENGTH = 0.3
-"""Metres per radian weighing the orientation error against the position error."""
-
 ACCELERATION_PER_VELOCITY = 5.0
 """Default joint acceleration limit, per second times the velocity limit
 (URDF carries no acceleration limit): top speed is reached in 0.2 s."""
@@ -606,6 +596,7 @@ class UrdfArm(DriveArm):
         self._reach = self._reaches()
         steps = np.linalg.norm(model.origins[:, :3, 3], axis=1)
         travel = np.where(self._prism, np.max(np.abs(lim), axis=1), 0.0)
+        self._base_c = np.ascontiguousarray(self.base)
         self._shoulder = (self.base @ model.origins[0])[:3, 3]
         self._max_reach = (
             math.inf
@@ -647,43 +638,11 @@ class UrdfArm(DriveArm):
         return out
 
     def ik(self, pose: Transform, q_hint: JointVector | None = None) -> JointVector:
-        target = np.asarray(pose, dtype=float)
-        if target.shape != (4, 4) or not np.all(np.isfinite(target)):
-            raise ValidationError(f"arm {self.name!r}: a pose must be a finite (4, 4) transform")
-        lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
-        n = self.dof
-        dist = float(np.linalg.norm(target[:3, 3] - self._shoulder))
-        if dist > self._max_reach:
-            raise Unreachable(
-                f"arm {self.name!r}: the point is {dist:.4g} m from the shoulder, beyond the "
-                f"reach {self._max_reach:.4g} m"
-            )
-        first = self.home if q_hint is None else np.asarray(q_hint, dtype=float)
-        rng = np.random.default_rng(12345)
-        starts = np.vstack([first, self.home, lo + (hi - lo) * rng.random((IK_RESTARTS, n))])
-        w = np.array([1.0, 1.0, 1.0, IK_LENGTH, IK_LENGTH, IK_LENGTH])
         m = self.model
-        q, err, ok = chain_ik(
-            np.ascontiguousarray(self.base),
-            m.origins,
-            m.axes,
-            self._prism,
-            m.tool,
-            lo,
-            hi,
-            np.ascontiguousarray(target),
-            np.ascontiguousarray(starts),
-            w,
-            IK_TOL,
-            IK_ITERATIONS,
+        chain = (self._base_c, m.origins, m.axes, self._prism, m.tool)
+        return numerical_ik(
+            self, pose, q_hint, self._shoulder, self._max_reach, chain, IK_ITERATIONS
         )
-        if not ok:
-            raise Unreachable(
-                f"arm {self.name!r}: no joint vector within the limits reaches the pose "
-                f"(best error {err:.3g} after {len(starts)} starts)"
-            )
-        out: FloatArray = np.clip(q, lo, hi)
-        return out
 
     def mesh_transforms(self, q: FloatArray) -> FloatArray:
         """(N, M, 4, 4) world pose of every collision mesh's frame for ``q`` (N, dof)."""

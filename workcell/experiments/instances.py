@@ -11,7 +11,7 @@ from typing import Any
 
 from multiarm.errors import UsageError
 from scheduler import Problem, read_fjsp
-from scheduler.generate import random_problem
+from scheduler.generate import generate_problem
 from workcell.cell import EXAMPLES, load_cell, load_example
 from workcell.compile import compile_cell
 from workcell.experiments.grid import InstanceSpec
@@ -37,7 +37,8 @@ def build_problem(instance: InstanceSpec) -> Problem:
 
     Built-in cells and cell files are compiled (FCL sweeps, travel setups,
     the blocking oracle); FJSP files are read; generated problems come from
-    :func:`scheduler.generate.random_problem` with the instance's seed.
+    :func:`scheduler.generate.generate_problem` (the instance's ``generator``,
+    default ``zones``: :func:`~scheduler.generate.random_problem`) with the instance's seed.
 
     Parameters
     ----------
@@ -52,8 +53,15 @@ def build_problem(instance: InstanceSpec) -> Problem:
         return read_fjsp(path if path.is_absolute() else Path(instance.base_dir) / path)
     if instance.kind == "generated":
         p = dict(instance.params)
-        return random_problem(
-            p.pop("arms"), p.pop("tasks"), p.pop("zones"), p.pop("tools"), seed=instance.seed, **p
+        p.pop("waits", None)  # how the problem is solved (see runner), not made
+        return generate_problem(
+            p.pop("generator", "zones"),
+            p.pop("arms"),
+            p.pop("tasks"),
+            p.pop("zones"),
+            p.pop("tools"),
+            seed=instance.seed,
+            **p,
         )
     if instance.source in EXAMPLES:
         return compile_cell(load_example(instance.source)).problem

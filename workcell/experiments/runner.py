@@ -16,15 +16,24 @@ from workcell.experiments.rows import benchmark_row, error_row, result_row
 __all__ = ["run_one"]
 
 
-def _solve(problem: Problem, config: SolverConfig, seed: int) -> Result:
+def _solve(problem: Problem, config: SolverConfig, seed: int, waits: bool = True) -> Result:
     """Solve through :func:`scheduler.solve` with the configuration's typed options.
 
     Every option of a sweep file is a field of the solver's options class
     (:data:`scheduler.REGISTRY`), work limits included (``max_evaluations``,
     CP-SAT's ``max_deterministic_time``), so no run bypasses the one solve.
+    ``waits`` is a generated instance's ``waits`` field (every solver of
+    that instance alike).
     """
     options = REGISTRY[config.solver].options(**dict(config.options))
-    return solve(problem, config.solver, time_limit=config.time_limit, seed=seed, options=options)  # type: ignore[arg-type]
+    return solve(
+        problem,
+        config.solver,  # type: ignore[arg-type]
+        time_limit=config.time_limit,
+        seed=seed,
+        options=options,
+        waits=waits,
+    )
 
 
 def run_one(run: Run) -> dict[str, Any]:
@@ -61,7 +70,8 @@ def run_one(run: Run) -> dict[str, Any]:
         problem = build_problem(run.instance)
         build = time.perf_counter() - t0
         warmup = _warm_up()
-        result = _solve(problem, run.config, run.seed)
+        waits = bool(dict(run.instance.params).get("waits", True))
+        result = _solve(problem, run.config, run.seed, waits)
         if result.stats.interrupted:  # Ctrl-C cut the search short: not a result to keep
             raise KeyboardInterrupt
         makespan = validate(problem, result.schedule) if result.schedule is not None else math.inf

@@ -97,6 +97,7 @@ from typing import Any
 from multiarm.errors import FormatError, MultiarmError, UsageError
 from multiarm.text import parse_toml, read_source
 from scheduler import REGISTRY, SOLVERS, read_fjsp
+from scheduler.generate import GENERATORS
 from workcell.cell import EXAMPLES, load_cell
 from workcell.experiments._fields import (
     MAX_GENERATED,
@@ -149,6 +150,13 @@ _GENERATOR_KEYS = {
     "start_zones": bool,
     "blocking": bool,
     "grid": int,
+    "generator": str,
+    "setup_fraction": float,
+    "flexibility": float,
+    "stay_fraction": float,
+    "shared_fraction": float,
+    "reach": int,
+    "waits": bool,
 }
 _SOLVER_KEYS = {"label", "solver", "time_limit", "seeds", "options"}
 _FUNCTION = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
@@ -391,7 +399,14 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
             if key in item:
                 v = item[key]
                 ok = isinstance(v, bool) if typ is bool else not isinstance(v, bool)
-                if typ is float:
+                if typ is str:
+                    ok = v in GENERATORS
+                    if not ok:
+                        raise w.fail(
+                            f"{where}.{key}",
+                            f"expected one of {', '.join(map(repr, GENERATORS))}, got {v!r}",
+                        )
+                elif typ is float:
                     ok = ok and isinstance(v, int | float) and math.isfinite(v) and v >= 0
                 elif typ is int:
                     ok = ok and isinstance(v, int) and v >= 1
@@ -412,6 +427,8 @@ def _instances(w: _Where, item: Mapping[str, Any], where: str, base: Path) -> li
             )
             for s in seeds:
                 label = f"{arms}x{tasks}x{zones}x{tools}"
+                if params.get("waits") is False:  # solved without waits at zone borders
+                    label += "-nowait"
                 name = f"{label}-s{s}"
                 allp = {"arms": arms, "tasks": tasks, "zones": zones, "tools": tools, **params}
                 out.append(

@@ -51,7 +51,7 @@ import fcl
 import numpy as np
 
 from multiarm.errors import UsageError, ValidationError
-from multiarm.types import FloatArray, IntArray, Transform
+from multiarm.types import BoolArray, FloatArray, IntArray, Transform
 from workcell.arms.base import Arm, LinkShape
 from zones.geometry import Primitive
 
@@ -690,6 +690,88 @@ class CollisionWorld:
             if cd.result.is_collision:
                 return int(k)
         return -1
+
+    def collide_configurations(
+        self,
+        a: str,
+        transforms_a: FloatArray,
+        b: str,
+        transforms_b: FloatArray,
+        pairs: IntArray,
+    ) -> BoolArray:
+        """Whether group ``a`` in configuration ``i`` touches group ``b`` in configuration ``j``.
+
+        One call for many ``(i, j)`` pairs of two configuration lists (the
+        timed check of two arms' motions, :mod:`workcell.exactcheck`): the
+        FCL transforms of every configuration are built once, a group is
+        moved only when its configuration changes (sort ``pairs`` by ``i``
+        to move ``a`` least), and each pair is one broadphase query (first
+        hit only). Allowed pairs are not consulted: use it between groups of
+        different owners. Both groups keep the last configuration tested.
+
+        Parameters
+        ----------
+        a, b : str
+            Two different groups.
+        transforms_a : (Na, n_a, 4, 4) float
+        transforms_b : (Nb, n_b, 4, 4) float
+            ``n_a``, ``n_b`` = objects in each group (insertion order).
+        pairs : (P, 2) int
+            Configuration indices ``(i, j)``.
+
+        Returns
+        -------
+        (P,) bool
+
+        Raises
+        ------
+        multiarm.errors.UsageError
+            For an unknown group, or ``a == b``.
+        multiarm.errors.ValidationError
+            When the transforms do not match the groups or a pair is out of range.
+        """
+        if a == b:
+            raise UsageError(f"collide_configurations needs two groups, got {a!r} twice")
+        ga, gb = self._group(a), self._group(b)
+        ta = np.asarray(transforms_a, dtype=float)
+        tb = np.asarray(transforms_b, dtype=float)
+        for g, name, ts in ((ga, a, ta), (gb, b, tb)):
+            n = len(g.objects)
+            if ts.ndim != 4 or ts.shape[1:] != (n, 4, 4):
+                raise ValidationError(
+                    f"group {name!r} has {n} objects; transforms have shape {ts.shape}, "
+                    f"expected (N, {n}, 4, 4)"
+                )
+        pr = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+        if len(pr) and (pr.min() < 0 or pr[:, 0].max() >= len(ta) or pr[:, 1].max() >= len(tb)):
+            raise ValidationError(
+                f"configuration pairs out of range ({len(ta)} and {len(tb)} configurations)"
+            )
+        out = np.zeros(len(pr), dtype=bool)
+        if not len(pr):
+            return out
+        used_a, used_b = np.unique(pr[:, 0]), np.unique(pr[:, 1])
+        fa = {int(i): [_fcl_transform(t) for t in ta[i]] for i in used_a.tolist()}
+        fb = {int(j): [_fcl_transform(t) for t in tb[j]] for j in used_b.tolist()}
+        ma, mb = ga.sync(), gb.sync()
+        cb = fcl.defaultCollisionCallback
+        cur_a, cur_b = -1, -1
+        for k, (i, j) in enumerate(pr.tolist()):
+            if i != cur_a:
+                for obj, tf in zip(ga.objects, fa[i], strict=True):
+                    obj.setTransform(tf)
+                ma.update()
+                cur_a = i
+            if j != cur_b:
+                for obj, tf in zip(gb.objects, fb[j], strict=True):
+                    obj.setTransform(tf)
+                mb.update()
+                cur_b = j
+            cd = fcl.CollisionData(request=self._creq)
+            ma.collide(mb, cd, cb)
+            out[k] = bool(cd.result.is_collision)
+        ga.dirty = gb.dirty = False
+        return out
 
     def hits(self, name: str, against: str) -> tuple[str, ...]:
         """Names of the objects of group ``against`` that object ``name`` touches.

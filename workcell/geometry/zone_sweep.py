@@ -78,9 +78,10 @@ True
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -111,6 +112,11 @@ _CHUNK = 2048
 
 _MAX_ROUNDS = 60
 """Bisection rounds before a trajectory is declared discontinuous."""
+
+_SAMPLES: dict[int, tuple[Any, list[tuple[Any, float, int, FloatArray, FloatArray]]]] = {}
+"""The samples of live trajectories by ``id``: (a weak reference to the
+trajectory, [(weak reference to the arm, padding, n_grid, t, q)]). The
+compile's zone sweep, space grid and parking oracle ask for the same ones."""
 
 
 class JointTrajectoryLike(Protocol):
@@ -238,6 +244,8 @@ def sample_trajectory(
     t : (M,) float, seconds
         Sorted; includes every knot time.
     q : (M, dof) float
+        Both read-only: kept while the trajectory lives and handed to the
+        next call with the same trajectory, arm, padding and grid.
 
     Raises
     ------
@@ -247,6 +255,37 @@ def sample_trajectory(
     """
     if not (np.isfinite(padding) and padding > 0):
         raise ValidationError(f"arm {arm.name!r}: sweep padding must be > 0 m, got {padding}")
+    entry = _SAMPLES.get(id(traj))
+    if entry is not None and entry[0]() is traj:
+        for arm_ref, pad, grid, t_got, q_got in entry[1]:
+            if arm_ref() is arm and pad == padding and grid == n_grid:
+                return t_got, q_got
+    t, q = _sample(arm, traj, padding, n_grid)
+    t.setflags(write=False)
+    q.setflags(write=False)
+    key = id(traj)
+    try:
+        traj_ref = weakref.ref(traj, lambda ref: _forget(key, ref))
+        arm_ref = weakref.ref(arm)
+    except TypeError:  # not weakly referenceable: not kept
+        return t, q
+    if entry is None or entry[0]() is not traj:
+        entry = (traj_ref, [])
+        _SAMPLES[key] = entry
+    entry[1].append((arm_ref, float(padding), int(n_grid), t, q))
+    return t, q
+
+
+def _forget(key: int, ref: Any) -> None:
+    """Drop the samples of a trajectory that died (unless its id is taken anew)."""
+    entry = _SAMPLES.get(key)
+    if entry is not None and entry[0] is ref:
+        del _SAMPLES[key]
+
+
+def _sample(
+    arm: Arm, traj: JointTrajectoryLike, padding: float, n_grid: int
+) -> tuple[FloatArray, FloatArray]:
     duration = float(traj.duration)
     knots = np.asarray(traj.knot_times, dtype=float)
     if not np.isfinite(duration) or duration < 0:

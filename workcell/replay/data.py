@@ -27,7 +27,12 @@ from a run directory without the cell or the simulator
   cause (a task cut short ends at its arm's first fault after its start,
   or at the end of the replay; a task that never ran has no start);
 * ``faults``: kind (a key of :data:`workcell.style.FAULT_MARKS`), arm,
-  time and end.
+  time and end;
+* ``tools`` (optional; documents without it show no tools): each tool of
+  the zone map with its rack point and the intervals in which an arm holds
+  it (the run's tool reservations); the page draws it at its rack and, while
+  held, at the arm's ``tip`` body (each arm entry names its body on the
+  deepest kinematic frame).
 
 Nothing here imports the simulator: a run is whatever offers the few
 attributes of :class:`RunLike`.
@@ -304,6 +309,18 @@ def _check(doc: Any, where: str) -> None:
             raise ValidationError(f"{where}.bodies[{i}]: needs an integer 'arm'")
         if not 0 <= b["arm"] < n_arms:
             raise ValidationError(f"{where}.bodies[{i}].arm: no arm {b['arm']}")
+    tools = doc.get("tools", [])
+    if not isinstance(tools, list):
+        raise ValidationError(f"{where}.tools: wrong type {type(tools).__name__}")
+    for i, t in enumerate(tools):
+        rack = t.get("rack") if isinstance(t, dict) else None
+        if not (isinstance(rack, list) and len(rack) == 3 and isinstance(t.get("held"), list)):
+            raise ValidationError(f"{where}.tools[{i}]: needs a 'rack' point and 'held' intervals")
+        for k, h in enumerate(t["held"]):
+            if not (isinstance(h, dict) and isinstance(h.get("arm"), int)):
+                raise ValidationError(f"{where}.tools[{i}].held[{k}]: needs an integer 'arm'")
+            if not 0 <= h["arm"] < n_arms:
+                raise ValidationError(f"{where}.tools[{i}].held[{k}].arm: no arm {h['arm']}")
 
 
 def load_replay(path: str | PathLike[str]) -> ReplayData:
@@ -561,8 +578,9 @@ def _grid_solid(name: str, grid: float) -> list[dict[str, Any]]:
 
 def _arm_bodies(
     arm: Any, q: FloatArray, a: int, geometry: Geometry, meshes: _Meshes
-) -> tuple[list[dict[str, Any]], FloatArray]:
-    """Bodies of one arm and their world poses (N, B, 4, 4) along ``q`` (N, dof)."""
+) -> tuple[list[dict[str, Any]], FloatArray, int]:
+    """Bodies of one arm, their world poses (N, B, 4, 4) along ``q`` (N, dof),
+    and the tip: the (last) body on the deepest kinematic frame."""
     link_meshes = getattr(arm, "meshes", None)
     if geometry == "auto" and link_meshes and hasattr(arm, "mesh_transforms"):
         tfs = np.asarray(arm.mesh_transforms(q), dtype=float)
@@ -570,13 +588,44 @@ def _arm_bodies(
             {"arm": a, "name": str(m.name), "kind": "mesh", "mesh": meshes.add(m.vertices, m.faces)}
             for m in link_meshes
         ]
-        return bodies, tfs
-    tfs = np.asarray(arm.shape_transforms(q), dtype=float)
-    bodies = [
-        {"arm": a, "name": str(s.name), "kind": str(s.kind), "size": [float(x) for x in s.size]}
-        for s in arm.shapes
+        frames = [int(m.frame) for m in link_meshes]
+    else:
+        tfs = np.asarray(arm.shape_transforms(q), dtype=float)
+        bodies = [
+            {"arm": a, "name": str(s.name), "kind": str(s.kind), "size": [float(x) for x in s.size]}
+            for s in arm.shapes
+        ]
+        frames = [int(s.frame) for s in arm.shapes]
+    tip = max(range(len(frames)), key=lambda i: (frames[i], i)) if frames else -1
+    return bodies, tfs, tip
+
+
+def _tools(
+    result: RunLike, cell: Any, arm_index: Mapping[str, int], duration: float
+) -> list[dict[str, Any]]:
+    """Each tool of the zone map: its rack and when which arm holds it."""
+    racks = {str(t.name): [float(v) for v in t.rack] for t in getattr(cell.zone_map, "tools", ())}
+    if not racks:
+        return []
+    held: dict[str, list[dict[str, Any]]] = {name: [] for name in racks}
+    for row in result.reservations_frame().to_dict("records"):
+        name, arm = str(row["resource"]), str(row["arm"])
+        if str(row["kind"]) != "tool" or name not in racks or arm not in arm_index:
+            continue
+        s, e = _finite(row["start"]), _finite(row["end"])
+        if s is None:
+            continue
+        end = duration if e is None else min(e, duration)
+        if end > s:
+            held[name].append({"arm": arm_index[arm], "start": s, "end": end})
+    return [
+        {
+            "name": name,
+            "rack": rack,
+            "held": sorted(held[name], key=lambda h: (h["start"], h["end"])),
+        }
+        for name, rack in racks.items()
     ]
-    return bodies, tfs
 
 
 def build_replay(
@@ -654,10 +703,12 @@ def build_replay(
     meshes = _Meshes()
     bodies: list[dict[str, Any]] = []
     tf_parts: list[FloatArray] = []
+    tips: list[int] = []
     for a, name in enumerate(order):
         arm = by_name[name]
         q = np.asarray(joints[name], dtype=float).reshape(n, -1)
-        b, tfs = _arm_bodies(arm, q, a, geometry, meshes)
+        b, tfs, tip = _arm_bodies(arm, q, a, geometry, meshes)
+        tips.append(len(bodies) + tip if tip >= 0 else -1)
         bodies += b
         tf_parts.append(tfs.reshape(n, len(b), 4, 4))
     tf = np.concatenate(tf_parts, axis=1)  # (n, B, 4, 4)
@@ -717,7 +768,9 @@ def build_replay(
         "cell": str(cell.name),
         "duration": float(duration),
         "bounds": [lo.tolist(), hi.tolist()],
-        "arms": [{"name": a, "colour": _hex(colours[a])} for a in order],
+        "arms": [
+            {"name": a, "colour": _hex(colours[a]), "tip": tips[i]} for i, a in enumerate(order)
+        ],
         "bodies": bodies,
         "meshes": meshes.items,
         "frames": {
@@ -732,6 +785,7 @@ def build_replay(
         "zone_states": states,
         "tasks": tasks,
         "faults": faults,
+        "tools": _tools(result, cell, arm_index, duration),
         "fault_marks": {
             k: {"symbol": mark.marker, "label": mark.label} for k, mark in FAULT_MARKS.items()
         },

@@ -132,6 +132,23 @@ def test_urdf_arms_as_meshes_in_chromium(ready: None, tmp_path: Path) -> None:
         for a in data.document["arms"]:
             n = _hue_share(shots[0], a["colour"])
             assert n > 500, f"arm {a['name']} ({a['colour']}) shows in {n} pixels only"
+        # the screwdriver stands at its rack, then rides on the UR5 holding it
+        tool = data.document["tools"][0]
+        held = tool["held"][0]
+        rack = np.asarray(tool["rack"])
+        page.locator("#time").fill(f"{0.5 * held['start']:.3f}")
+        free = page.evaluate(f"window.multiarmReplay.toolAt({tool['name']!r})")
+        assert free["arm"] == -1 and np.allclose(free["position"], rack)
+        mid = 0.5 * (held["start"] + held["end"])
+        page.locator("#time").fill(f"{mid:.3f}")
+        carried = page.evaluate(f"window.multiarmReplay.toolAt({tool['name']!r})")
+        assert carried["arm"] == held["arm"]
+        t_now = page.evaluate("window.multiarmReplay.time()")
+        tip = data.document["arms"][held["arm"]]["tip"]
+        path = data.poses()[:, tip, :3]
+        want = [np.interp(t_now, data.times(), path[:, k]) for k in range(3)]
+        assert np.allclose(carried["position"], want, atol=2e-3)
+        assert np.linalg.norm(np.asarray(carried["position"]) - rack) > 0.05
 
 
 def test_notebook_view_runs_in_its_frame(

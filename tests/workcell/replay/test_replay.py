@@ -141,6 +141,14 @@ def test_bad_replay_documents_name_the_culprit(data: ReplayData, tmp_path: Path)
     with pytest.raises(ValidationError, match=r"bodies\[0\]\.arm: no arm 9"):
         ReplayData.from_json(json.dumps(doc))
     doc = json.loads(data.to_json())
+    doc["tools"][0]["held"][0]["arm"] = 7
+    with pytest.raises(ValidationError, match=r"tools\[0\]\.held\[0\]\.arm: no arm 7"):
+        ReplayData.from_json(json.dumps(doc))
+    doc = json.loads(data.to_json())
+    del doc["tools"][1]["rack"]
+    with pytest.raises(ValidationError, match=r"tools\[1\]: needs a 'rack'"):
+        ReplayData.from_json(json.dumps(doc))
+    doc = json.loads(data.to_json())
     doc["frames"]["n"] += 1
     with pytest.raises(ValidationError, match=r"frames\.poses: \d+ values, expected"):
         ReplayData.from_json(json.dumps(doc)).poses()
@@ -246,3 +254,39 @@ def test_planned_arm_is_the_given_plans(data: ReplayData, scara4_faulty_run: Any
         assert data.arm_names[t["planned_arm"]] == planned[t["task"]]
         moved += t["planned_arm"] != t["arm"]
     assert moved > 0, "nw's tasks ran on other arms"
+
+
+def test_tools_stand_at_their_racks_and_follow_the_holders_reservations(
+    data: ReplayData, scara4_cc: Any, scara4_faulty_run: Any
+) -> None:
+    """Every tool of the zone map is in the document at its rack, held exactly
+    in the run's tool reservations (clipped to the replay), and every arm
+    names its tip: a body on its deepest kinematic frame."""
+    zm = scara4_cc.cell.zone_map
+    tools = {t["name"]: t for t in data.document["tools"]}
+    assert set(tools) == {t.name for t in zm.tools}
+    for t in zm.tools:
+        assert tools[t.name]["rack"] == pytest.approx(list(t.rack))
+    index = {a: i for i, a in enumerate(data.arm_names)}
+    want: dict[str, list[tuple[int, float, float]]] = {name: [] for name in tools}
+    for row in scara4_faulty_run.reservations_frame().to_dict("records"):
+        if row["kind"] == "tool" and np.isfinite(row["start"]):
+            end = min(row["end"], data.duration) if np.isfinite(row["end"]) else data.duration
+            if end > row["start"]:
+                want[row["resource"]].append((index[row["arm"]], row["start"], end))
+    assert sum(len(w) for w in want.values()) >= 2  # scara4's screws and presses use them
+    for name, t in tools.items():
+        got = np.array([(h["arm"], h["start"], h["end"]) for h in t["held"]]).reshape(-1, 3)
+        expect = np.array(sorted(want[name], key=lambda x: (x[1], x[2]))).reshape(-1, 3)
+        assert got.shape == expect.shape and np.allclose(got, expect, rtol=0, atol=1e-9)
+    bodies = data.document["bodies"]
+    for a, entry in enumerate(data.document["arms"]):
+        arm = scara4_cc.cell.arm(entry["name"])
+        deepest = max(s.frame for s in arm.shapes)
+        tip = bodies[entry["tip"]]
+        assert tip["arm"] == a
+        assert next(s for s in arm.shapes if s.name == tip["name"]).frame == deepest
+    # a document written before tools were drawn still loads
+    doc = json.loads(data.to_json())
+    del doc["tools"]
+    assert ReplayData.from_json(json.dumps(doc)).document.get("tools") is None

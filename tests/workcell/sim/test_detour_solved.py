@@ -1,25 +1,23 @@
 """The coordinator's OMPL-planned detour (S2.12 "continue with alternative trajectory").
 
-No built-in cell reaches it: with the space grid the zones keep arms apart
-(the geometric check never stops one), and without it (``scara4`` with
-``grid = 0``) every geometric stop has the other arm standing
-on the mover's next station (``goal_in_collision``: no detour, the arms back
-off instead). The cell here is ``scara4`` without the space grid plus a
-fifth SCARA with no capability, ``pole``, that never works and stands at its
-start joints by the east side: the compile drops the modes whose motions
-would hit it, which changes the greedy plan so that ``se``, on its way to
-the next station of a task, finds ``nw`` parked in its way while that
-station is free. The straight joint move touches ``nw`` too; OMPL
-(RRTConnect, seeded, work-limited) plans a way around it. The arm follows
-that path, goes on with its task from the station, the independent safety
-monitor (live, the default) stays quiet and every task completes.
-
-The search needs about 4100 configuration checks, within the coordinator's
-work limit (``detour_checks``, 10,000).
+The cell here is ``scara4`` without the space grid plus a fifth SCARA with
+no capability, ``pole``, that never works and stands at its start joints by
+the east side: the compile drops the modes whose motions would hit it, which
+changes the greedy plan so that ``se``, on its way through a task, finds
+another arm standing in its way. Its next station touches that arm too, so
+the detour runs over the whole contact stretch, past the stations in it, to
+the first clear pose of the task's leg after the contact (holding the zones
+of the stations it passes). The straight joint move touches the standing
+arm; OMPL (RRTConnect, seeded, work-limited by ``SimOptions.detour_checks``)
+plans a way around it. The arm follows that path, goes on with its task from
+there, the independent safety monitor (live, the default) stays quiet and
+every task completes. Everything is read from the public records (the
+trace, the motion records), not from the planner's calls.
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +28,7 @@ import workcell
 from scheduler import solve
 from workcell import compile_cell, simulate
 from workcell.cell import load_cell
-from workcell.geometry import check_path, plan_detour
+from workcell.geometry import ObstacleSet, check_path
 from workcell.sim.events.trace import Trace
 from workcell.sim.harness.monitor import SafetyMonitor
 
@@ -55,51 +53,54 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     cc = compile_cell(load_cell(path))
     plan = solve(cc.problem, "greedy", seed=0).schedule
     assert plan is not None
-    found: list[Any] = []
-    mp = pytest.MonkeyPatch()
-    real_plan = plan_detour  # the function the coordinator imported
+    result = simulate(cc, plan, seed=0)  # the live safety monitor is on
+    return {"cc": cc, "plan": plan, "result": result}
 
-    def spy(*args: Any, **kwargs: Any) -> Any:  # records what the planner answered
-        res = real_plan(*args, **kwargs)
-        found.append((args, kwargs, res))
-        return res
 
-    mp.setattr("workcell.sim.coordination.geometric.plan_detour", spy)
-    try:
-        result = simulate(cc, plan, seed=0)  # the live safety monitor is on
-    finally:
-        mp.undo()
-    return {"cc": cc, "plan": plan, "result": result, "found": found}
+def _detour_legs(r: Any, arm: str) -> list[Any]:
+    log = next(c for c in r.arm_logs if c.name == arm)
+    return [rec for rec in log.records if rec.leg is not None and rec.leg.kind == "detour"]
 
 
 def test_a_parked_arm_in_the_way_gets_a_planned_detour(run: dict[str, Any]) -> None:
-    r = run["result"]
-    solved = [(a, k, res) for a, k, res in run["found"] if res.status == "solved"]
-    assert len(solved) == 1
-    args, _kwargs, res = solved[0]
-    arm, q_start, q_goal, obstacles = args
-    assert arm.name == "se" and obstacles.name == "standing arms"
-    # a real detour: the straight joint move touches the pole, the path does not
-    assert not check_path(arm, np.stack([q_start, q_goal]), obstacles, step=0.002)
-    assert len(res.path) >= 3
-    assert check_path(arm, res.path, obstacles, step=0.002)
-    # the trace shows it, as an alternative around the standing pole
+    r, cc = run["result"], run["cc"]
+    # the trace shows it, as an alternative around the standing arm
     detours = [e for e in r.trace if e.kind == "detour" and "alternative trajectory" in e.detail]
     assert len(detours) == 1
-    assert detours[0].arm == "se" and "around arm(s) 'nw'" in detours[0].detail
+    ev = detours[0]
+    found = re.search(r"around arm\(s\) '(\w+)'", ev.detail)
+    assert ev.arm == "se" and found is not None
+    blocker = found.group(1)
     assert r.metrics.detours == len([e for e in r.trace if e.kind == "detour"])
+    # the executed leg is a planned path (OMPL: more than the straight move's two knots)
+    (rec, *_) = _detour_legs(r, "se")
+    tr = rec.leg.trajectory
+    path = tr.sample(np.asarray(tr.knot_times))
+    assert len(path) >= 3
+    # around the arm where it stood: the straight joint move touches it, the path does not
+    other = next(c for c in r.arm_logs if c.name == blocker)
+    at = np.array([rec.start])
+    q_other = next(x for x in other.records if x.start <= rec.start <= x.end).joints_at(at)[0]
+    obstacles = ObstacleSet.from_arm(cc.cell.arm(blocker), q_other)
+    arm = cc.cell.arm("se")
+    assert not check_path(arm, np.stack([path[0], path[-1]]), obstacles, step=0.002)
+    assert check_path(arm, path, obstacles, step=0.002)
 
 
 def test_the_arm_follows_the_planned_path_and_the_task_completes(run: dict[str, Any]) -> None:
     r = run["result"]
-    (_args, _kwargs, res) = next(x for x in run["found"] if x[2].status == "solved")
     se = next(c for c in r.arm_logs if c.name == "se")
     legs = [rec for rec in se.records if rec.leg is not None and rec.leg.kind == "detour"]
     assert legs, "the detour leg was never executed"
     leg = legs[0].leg
-    # the executed leg is the OMPL path timed with the arm's drives ...
+    # the executed leg is the OMPL path timed with the arm's drives, from
+    # where the arm stood to a pose of its task's trajectory ...
     knots = leg.trajectory.sample(np.asarray(leg.trajectory.knot_times))
-    assert np.allclose(knots, res.path, atol=1e-9)
+    before = next(x for x in se.records if x.end == legs[0].start and x.leg is not None)
+    assert np.allclose(knots[0], before.joints_at(np.array([before.end]))[0], atol=1e-9)
+    after = next(x for x in se.records if x.start == legs[-1].end and x.leg is not None)
+    assert after.leg.kind == "task"
+    assert np.allclose(knots[-1], after.joints_at(np.array([after.start]))[0], atol=1e-9)
     # ... driven from its start to its end
     assert sum(r.end - r.start for r in legs if r.moving) == pytest.approx(leg.duration, abs=1e-9)
     ev = next(e for e in r.trace if e.kind == "detour" and "alternative" in e.detail)

@@ -169,14 +169,16 @@ def test_the_docs_diagrams_are_generated_from_the_tables() -> None:
 def test_the_policy_registry_is_what_simulate_accepts(cell: Any, plan: Any) -> None:
     from workcell.sim import simulate
     from workcell.sim.coordination.centralized import Coordinator
+    from workcell.sim.coordination.distributed import DistributedPolicy
     from workcell.sim.coordination.policy import POLICIES, make_policy, register_policy
     from workcell.sim.harness.options import COORDINATION_POLICIES
 
-    assert sorted(POLICIES) == sorted(COORDINATION_POLICIES) == ["centralized"]
+    assert sorted(POLICIES) == sorted(COORDINATION_POLICIES) == ["centralized", "distributed"]
     assert POLICIES["centralized"] is Coordinator
+    assert POLICIES["distributed"] is DistributedPolicy
     with pytest.raises(UsageError, match="already registered"):
         register_policy("centralized", Coordinator)
-    with pytest.raises(UsageError, match="unknown coordination policy 'distributed'"):
-        make_policy("distributed", cell, plan, None, None, None, [])  # type: ignore[arg-type]
-    with pytest.raises(UsageError, match="unknown coordination policy 'distributed'"):
-        simulate(cell, plan, coordination="distributed")
+    with pytest.raises(UsageError, match="unknown coordination policy 'gossip'"):
+        make_policy("gossip", cell, plan, None, None, None, [])  # type: ignore[arg-type]
+    with pytest.raises(UsageError, match="unknown coordination policy 'gossip'"):
+        simulate(cell, plan, coordination="gossip")

@@ -11,6 +11,7 @@ import dataclasses
 import json
 import math
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -180,44 +181,37 @@ def test_every_message_type_is_exercised(supersigma: Any, plans: Any) -> None:
 
 
 def test_oscillating_geometric_stops_cannot_spin_without_time_advancing(
-    scara4: Any, plans: Any, monkeypatch: pytest.MonkeyPatch
+    scara4: Any, plans: Any
 ) -> None:
     """A guard whose answer changes at every look (the arm in the way
     alternates) made the coordinator re-check forever at one instant. Now
     the re-checks at one instant are bounded, later ones wait a guard period,
     and after a bounded number of those the stopped arms stay stopped: the
-    run ends, its tasks failed with the cause (work limit: guard calls)."""
-    from workcell.sim.coordination.centralized import Coordinator
-    from workcell.sim.coordination.guard import GeometryGuard
-
+    run ends, its tasks failed with the cause (work limit: guard calls).
+    The answer comes from ``SimOptions.guard_answer``, detours are off."""
     calls = [0]
 
-    def blockers(self: GeometryGuard, mover: Any, arms: list[Any]) -> list[int]:
+    def blockers(mover: Any, arms: Sequence[Any]) -> list[int]:
         calls[0] += 1
         if calls[0] > 100_000:
             raise RuntimeError("work limit: the coordinator keeps re-checking")
         others = [o.index for o in arms if o is not mover]
         return [others[calls[0] % len(others)]]
 
-    monkeypatch.setattr(GeometryGuard, "blockers", blockers)
-    monkeypatch.setattr(Coordinator, "try_detour", lambda self, ctl: False)
-    r = simulate(scara4, plans["scara4"]["greedy"], options=SimOptions(monitor=False))
+    options = SimOptions(monitor=False, detours=False, guard_answer=blockers)
+    r = simulate(scara4, plans["scara4"]["greedy"], options=options)
     assert calls[0] < 20_000
     assert r.metrics.done_tasks == 0
     causes = set(r.tasks_frame()["cause"])
     assert any("unresolved geometric deadlock" in c for c in causes)
 
 
-def test_utilisation_is_busy_time_over_the_executed_makespan(
-    supersigma: Any, plans: Any, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """Every arm stops for good on its way to its second task (a stub guard)
-    while the run goes on (an emergency stop late in the plan): the arms
-    stand on their legs long after the last completed task, and that time
-    is not counted. Utilisation stays busy time / executed makespan, in [0, 1]."""
-    from workcell.sim.coordination.centralized import Coordinator
-    from workcell.sim.coordination.guard import GeometryGuard
-
+def test_utilisation_is_busy_time_over_the_executed_makespan(supersigma: Any, plans: Any) -> None:
+    """Every arm stops for good on its way to its second task (the guard's
+    answer stubbed through ``SimOptions.guard_answer``, detours off) while the
+    run goes on (an emergency stop late in the plan): the arms stand on their
+    legs long after the last completed task, and that time is not counted.
+    Utilisation stays busy time / executed makespan, in [0, 1]."""
     plan = plans["supersigma"]["greedy"]
     p = supersigma.problem
     first = {
@@ -225,17 +219,14 @@ def test_utilisation_is_busy_time_over_the_executed_makespan(
         for a in set(plan.arms(p).tolist())
     }
 
-    def blockers(self: GeometryGuard, mover: Any, arms: list[Any]) -> list[int]:
+    def blockers(mover: Any, arms: Sequence[Any]) -> list[int]:
         if mover.leg is None or mover.leg.task == first.get(mover.index):
             return []
         return [o.index for o in arms if o is not mover][:1]
 
-    monkeypatch.setattr(GeometryGuard, "blockers", blockers)
-    monkeypatch.setattr(Coordinator, "try_detour", lambda self, ctl: False)
     late = 0.9 * plan.makespan
-    r = simulate(
-        supersigma, plan, faults=[EmergencyStop(late, 1.0)], options=SimOptions(monitor=False)
-    )
+    options = SimOptions(monitor=False, detours=False, guard_answer=blockers)
+    r = simulate(supersigma, plan, faults=[EmergencyStop(late, 1.0)], options=options)
     m = r.metrics
     assert 0 < m.done_tasks < p.n_tasks and m.executed_makespan < 0.5 * late
     assert set(m.utilisation) == set(p.arm_names)
@@ -249,15 +240,13 @@ def test_utilisation_is_busy_time_over_the_executed_makespan(
 
 
 def test_a_blocked_arm_continues_with_an_alternative_trajectory(
-    supersigma: Any, plans: Any, monkeypatch: pytest.MonkeyPatch
+    supersigma: Any, plans: Any
 ) -> None:
-    """S2.12 "continue with alternative trajectory": the guard (stubbed)
-    reports the standing arm in the way of the mover's next stretch of its
+    """S2.12 "continue with alternative trajectory": the guard (its answer
+    stubbed through ``SimOptions.guard_answer``) reports the standing arm in the way of the mover's next stretch of its
     first task; the coordinator plans an OMPL detour around that arm to the
     next station, the mover takes it and goes on with its task from there;
     the detour costs more than the plan charged, so the plan is re-solved."""
-    from workcell.sim.coordination.guard import GeometryGuard
-
     p = supersigma.problem
     plan = plans["supersigma"]["greedy"]
     arms = plan.arms(p)
@@ -266,7 +255,7 @@ def test_a_blocked_arm_continues_with_an_alternative_trajectory(
     task = min((t for t in range(p.n_tasks) if arms[t] == mover), key=lambda t: plan.start[t])
     seen: list[str] = []
 
-    def blockers(self: GeometryGuard, ctl: Any, all_arms: list[Any]) -> list[int]:
+    def blockers(ctl: Any, all_arms: Sequence[Any]) -> list[int]:
         leg = ctl.leg
         if ctl.index != mover or leg is None:
             return []
@@ -281,8 +270,8 @@ def test_a_blocked_arm_continues_with_an_alternative_trajectory(
             return [other]
         return []
 
-    monkeypatch.setattr(GeometryGuard, "blockers", blockers)
-    r = simulate(supersigma, plan)  # the monitor checks the detour against the standing arm
+    # the monitor checks the detour against the standing arm
+    r = simulate(supersigma, plan, options=SimOptions(guard_answer=blockers))
     detours = [e for e in r.trace if e.kind == "detour"]
     assert len(detours) == 1 and r.metrics.detours == 1
     assert detours[0].arm == p.arm_names[mover] and detours[0].task == p.task_names[task]
@@ -378,12 +367,13 @@ def test_sim_options_and_the_result_are_frozen_records(supersigma: Any, plans: A
     assert r.plan.makespan == pytest.approx(plan.makespan)
 
 
-def test_only_the_centralized_policy_exists(supersigma: Any, plans: Any) -> None:
+def test_an_unknown_policy_is_refused_listing_the_known_ones(supersigma: Any, plans: Any) -> None:
     plan = plans["supersigma"]["greedy"]
     with pytest.raises(
-        UsageError, match=r"unknown coordination policy 'distributed' \(known: centralized\)"
+        UsageError,
+        match=r"unknown coordination policy 'gossip' \(known: centralized, distributed\)",
     ):
-        simulate(supersigma, plan, coordination="distributed")
+        simulate(supersigma, plan, coordination="gossip")
     with pytest.raises(UsageError, match="options must be a SimOptions"):
         simulate(supersigma, plan, options={"resolve": False})  # type: ignore[arg-type]
     with pytest.raises(TypeError):

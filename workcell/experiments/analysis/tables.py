@@ -139,6 +139,8 @@ def generated_table(
     tree: str = "tree",
     short: str = "cpsat_short",
     greedy: str = "greedy",
+    title: str = "Zone-constrained generated problems",
+    sweep: str = "generated",
 ) -> str:
     """The table of ``benchmarks/results/generated.md`` from the results of ``sweeps/generated.toml``.
 
@@ -151,6 +153,8 @@ def generated_table(
     df : pandas.DataFrame
     reference_label, tree, short, greedy : str
         The solver labels of the sweep file.
+    title, sweep : str
+        The table's heading and the sweep it names (``sweeps/<sweep>.toml``).
 
     Returns
     -------
@@ -173,8 +177,9 @@ def generated_table(
         refmk = float(r["makespan"])
         rows.append(
             {
-                "size": f"{params['arms']}x{params['tasks']}x{params['zones']}x{params['tools']}",
-                "order": (params["tasks"], params["arms"]),
+                "size": f"{params['arms']}x{params['tasks']}x{params['zones']}x{params['tools']}"
+                + (" no waits" if params.get("waits") is False else ""),
+                "order": (params["tasks"], params["arms"], params.get("waits") is False),
                 "seed": int(r["instance_seed"]),
                 "opt": opt,
                 "target": target,
@@ -188,12 +193,12 @@ def generated_table(
         )
     rows.sort(key=lambda r: (r["order"], r["seed"]))
     lines = [
-        "# Zone-constrained generated problems",
+        f"# {title}",
         "",
         f"tree, cpsat (short) and greedy: {tl[tree]:g} s; reference CP-SAT: {tl[reference_label]:g} s "
-        "(sweep `benchmarks/sweeps/generated.toml`); size = arms x tasks x zones x tools. Target = "
+        f"(sweep `benchmarks/sweeps/{sweep}.toml`); size = arms x tasks x zones x tools. Target = "
         "the reference's optimum when proven, else its best bound (then gaps are upper bounds on "
-        "the true gaps).",
+        "the true gaps). 'no waits': every solver solved it with `waits=False`.",
         "",
         "| size | seed | optimal? | target | reference | tree | cpsat short | greedy | tree gap | "
         "cpsat short gap | tree vs reference |",
@@ -208,6 +213,17 @@ def generated_table(
         )
     opt = [r for r in rows if r["opt"]]
     lines.append("")
+    behind = sum(r["tree"] > r["short"] + 1e-6 for r in rows)
+    ahead = sum(r["tree"] < r["short"] - 1e-6 for r in rows)
+    lines.append(
+        f"- tree against CP-SAT at the same {tl[tree]:g} s: behind on {behind}, ahead on "
+        f"{ahead}, equal on {len(rows) - behind - ahead} of {len(rows)} problems"
+    )
+    if opt:
+        hit = sum(r["tree"] <= r["target"] + 1e-6 for r in opt)
+        lines.append(
+            f"- tree at {tl[tree]:g} s reaches the proven optimum on {hit} of {len(opt)} problems"
+        )
     if opt:
         lines.append(
             f"- on the {len(opt)} problems CP-SAT solved to optimality: mean gap of tree "

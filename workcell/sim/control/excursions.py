@@ -59,15 +59,42 @@ def back_off(self: _Self, until: tuple[int, Any, int]) -> bool:
     return True
 
 
-def take_detour(self: _Self, traj: JointTrajectory, task: int) -> None:
-    """Go to the next station along ``traj`` instead (S2.12 alternative
-    trajectory), then on with the task from there."""
+def take_detour(self: _Self, traj: JointTrajectory, task: int, rejoin: float | None = None) -> None:
+    """Go along ``traj`` instead (S2.12 alternative trajectory) to the leg
+    offset ``rejoin`` (default: the next station), then on with the task
+    from there.
+
+    The stations the detour passes (before ``rejoin``) keep their zone
+    reservations (S2.5): their resources are requested now and must all be
+    granted before the detour sets off (not before the earliest time the
+    plan lets the arm reach them), and those they give back are given back
+    at its end."""
     leg = self.leg
     assert leg is not None
-    self.away = (leg, self.k, leg.stations[self.k].tau, False)
+    k = self.k
+    if rejoin is None:
+        rejoin = leg.stations[k].tau
+    k2 = k
+    while k2 < len(leg.stations) - 1 and leg.stations[k2].tau < rejoin:
+        k2 += 1
+    passed = leg.stations[k:k2]
+    stations = [Station(traj.duration, end=True)]
+    if passed:
+        for st in passed:
+            self._send_requests(st)
+        stations[0].release = [p for st in passed for p in st.release]
+        notbefore = max(st.notbefore - (st.tau - self.tau) for st in passed)
+        first = Station(
+            0.0,
+            notbefore=notbefore,
+            acquire=[p for st in passed for p in st.acquire],
+            requested=True,
+        )
+        stations.insert(0, first)
+    self.away = (leg, k2, float(rejoin), False)
     self.away_until = None
     self._close_segment()
-    self.leg = Leg("detour", task, -1, traj, [Station(traj.duration, end=True)])
+    self.leg = Leg("detour", task, -1, traj, stations)
     self.k, self.tau, self.t_ref = 0, 0.0, self.kernel.now
     self.at_station = False
     self.stops.discard("geometry")

@@ -49,7 +49,7 @@ from __future__ import annotations
 import bisect
 import itertools
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from collections.abc import Set as AbstractSet
 from typing import Any, Self
 
@@ -152,6 +152,13 @@ class Coordinator:
         Re-solve when reality departs from the plan; False keeps the plan
         (a failed arm's tasks are then reported failed, late parts push the
         tasks they gate back).
+    detours : bool
+        Plan S2.12 alternative trajectories around standing arms.
+    detour_checks : int
+        Work limit of one detour search (configuration checks).
+    guard_answer : callable, optional
+        Asked in place of :meth:`GeometryGuard.blockers`
+        (:attr:`~workcell.sim.harness.options.SimOptions.guard_answer`).
     """
 
     def __init__(
@@ -169,6 +176,9 @@ class Coordinator:
         zone_checks: bool = True,
         geometry: bool = True,
         resolving: bool = True,
+        detours: bool = True,
+        detour_checks: int = 10_000,
+        guard_answer: Callable[[ArmPort, Sequence[ArmPort]], Sequence[int]] | None = None,
     ) -> None:
         self.cc = compiled
         self.p: Problem = compiled.problem
@@ -238,7 +248,11 @@ class Coordinator:
         # zones, workcell.geometry.reach) are kept apart by the plan order alone.
         self.sdl_zones = frozenset(zm.zone_names())
         net.receivers[0] = self.receive
-        self.guard = GeometryGuard(compiled, clock=lambda: self.kernel.now) if geometry else None
+        self.guard = (
+            GeometryGuard(compiled, clock=lambda: self.kernel.now, answer=guard_answer)
+            if geometry
+            else None
+        )
         self.geo_held: dict[int, list[int]] = {}
         self._recheck_h: Handle | None = None
         self.backoffs = 0
@@ -251,7 +265,9 @@ class Coordinator:
         self.stalled = 0
         """Deferred rechecks since a task last started or ended."""
         self.max_stalled = 200
-        self.detour_checks = 10_000
+        self.detour_planning = bool(detours)
+        """Plan S2.12 alternative trajectories (off: an ablation)."""
+        self.detour_checks = int(detour_checks)
         """Work limit of one OMPL detour search (validity checks, about 10 us
         each): a search that needs more answers "no detour" and the arm waits."""
         self._build_orders()
@@ -564,6 +580,8 @@ class Coordinator:
     _try_activation = recovery._try_activation
     _withdraw = recovery._withdraw
     _withdraw_never = recovery._withdraw_never
+    _fail_never = recovery._fail_never
+    _fail_impossible = recovery._fail_impossible
     resolve = recovery.resolve
 
     # ------------------------------------------------------------ faults

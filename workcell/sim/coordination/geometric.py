@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from workcell.geometry import ObstacleSet, plan_detour
+from workcell.geometry import DetourPlanner, ObstacleSet
+from workcell.sim.protocol.messages import Leg
 from workcell.sim.protocol.ports import ArmPort
 
 _Self = Any
@@ -47,13 +48,23 @@ def check_departure(self: _Self, ctl: ArmPort) -> bool:
 
 
 def try_detour(self: _Self, ctl: ArmPort) -> bool:
-    """S2.12 "continue with alternative trajectory": an OMPL path to the
-    next station around the arms standing in the way (tried once per
-    station; work-limited, so the same seed plans the same path)."""
+    """S2.12 "continue with alternative trajectory": an OMPL path around the
+    arms standing in the way (tried once per station; work-limited, so the
+    same seed plans the same path).
+
+    The path starts where the arm stands and ends at its next station, or,
+    when that station lies inside the stretch of the motion that touches
+    the standing arms (a zone border of the space grid can), at the first
+    pose of the leg after that stretch: the detour then passes the stations
+    in between, whose resources the arm holds for the whole detour
+    (:meth:`~workcell.sim.protocol.ports.ArmPort.take_detour`), as the
+    compile's oracle plans it from the knot before the contact to the knot
+    after it."""
     leg = ctl.leg
     blockers = self.geo_held.get(ctl.index, [])
     if (
-        leg is None
+        not self.detour_planning
+        or leg is None
         or leg.kind != "task"
         or ctl.away is not None
         or not blockers
@@ -66,26 +77,29 @@ def try_detour(self: _Self, ctl: ArmPort) -> bool:
     self.detour_tried.add(key)
     arm = ctl.arm
     qa = ctl.position()
-    qb = leg.trajectory.sample(np.array([leg.stations[ctl.k].tau]))[0]
     items: list[Any] = []
     for b in blockers:
         other = self.arms[b]
         items.extend(ObstacleSet.from_arm(other.arm, other.position()).items)
-    res = plan_detour(
-        arm,
-        qa,
-        qb,
-        ObstacleSet(items, name="standing arms"),
-        budget=60.0,
-        seed=self.seed,
-        resolution=0.01,
-        clearance=0.02,
-        max_checks=self.detour_checks,
+    ctx = DetourPlanner(
+        arm, ObstacleSet(items, name="standing arms"), resolution=0.01, clearance=0.02
     )
+    rejoin = _rejoin(ctx, leg, float(leg.stations[ctl.k].tau))
+    if rejoin is None:  # a pose the task must pass touches them: no way around
+        return False
+    passed = [st for st in leg.stations[ctl.k :] if st.tau < rejoin]
+    if not all(self._grantable(piece) for st in passed for piece in st.acquire):
+        # the zones of the stations it would pass are not all free in plan
+        # order: holding some while waiting for others could deadlock; try
+        # again at the next look (after something moved)
+        self.detour_tried.discard(key)
+        return False
+    qb = leg.trajectory.sample(np.array([rejoin]))[0]
+    res = ctx.plan(qa, qb, budget=60.0, seed=self.seed, max_checks=self.detour_checks)
     if not res.solved:  # "direct" (the straight joint move is free) or "solved"
         return False
     traj = arm.time_path(res.path, "sync")
-    extra = traj.duration - (leg.stations[ctl.k].tau - ctl.tau)
+    extra = traj.duration - (rejoin - ctl.tau)
     self.detours += 1
     self.trace.add(
         self.kernel.now,
@@ -95,12 +109,34 @@ def try_detour(self: _Self, ctl: ArmPort) -> bool:
         delay=extra,
         detail=f"alternative trajectory around arm(s) "
         f"{', '.join(repr(self.p.arm_names[b]) for b in blockers)} (S2.12): "
-        f"{extra:+.6g} s",
+        f"{extra:+.6g} s"
+        + (f", past {len(passed)} station(s) to offset {rejoin:.6g} s" if passed else ""),
     )
-    ctl.take_detour(traj, leg.task)
+    ctl.take_detour(traj, leg.task, rejoin)
     if extra > float(self.plan.blocking[leg.task]) + 1e-9:
         self.resolve(f"detour of task {self.p.task_names[leg.task]!r} costs more than planned")
     return True
+
+
+def _rejoin(ctx: DetourPlanner, leg: Leg, tau: float, step: float = 0.01) -> float | None:
+    """Where a detour towards the station at leg offset ``tau`` rejoins the
+    leg: that station when its pose is clear of the standing arms, else the
+    first clear pose after it (sampled every ``step`` seconds of the leg, and
+    at its knots). ``None`` when a knot of the trajectory touches them first
+    (as for the compile's oracle: the task must pass through that pose, no
+    detour can avoid it) or the leg never clears them again."""
+    end = float(leg.stations[-1].tau)
+    knots = np.asarray(leg.trajectory.knot_times, dtype=float)
+    knots = knots[(knots > tau) & (knots <= end)]
+    taus = np.union1d(np.append(np.arange(tau, end, step), end), knots)
+    is_knot = np.isin(taus, knots)
+    qs = leg.trajectory.sample(taus)
+    for t, q, knot in zip(taus.tolist(), qs, is_knot.tolist(), strict=True):
+        if ctx.is_valid(q):
+            return float(t)
+        if knot:
+            return None
+    return None
 
 
 def check_way(self: _Self, ctl: ArmPort) -> bool:

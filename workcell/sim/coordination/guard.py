@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -70,6 +70,10 @@ class GeometryGuard:
         Metres added around every shape.
     clock : callable
         ``clock()`` -> the simulated time now, seconds.
+    answer : callable, optional
+        ``answer(mover, arms) -> indices``, asked in place of the check
+        (:attr:`~workcell.sim.harness.options.SimOptions.guard_answer`:
+        an ablation for tests).
     """
 
     def __init__(
@@ -78,8 +82,10 @@ class GeometryGuard:
         dt: float = 0.01,
         padding: float = 0.02,
         clock: Callable[[], float] = lambda: 0.0,
+        answer: Callable[[ArmPort, Sequence[ArmPort]], Sequence[int]] | None = None,
     ) -> None:
         self.clock = clock
+        self.answer = answer
         cell = compiled.cell
         self.cell = cell
         self.dt = float(dt)
@@ -149,6 +155,9 @@ class GeometryGuard:
 
     def blockers(self, mover: ArmPort, arms: list[ArmPort]) -> list[int]:
         """Arms in the way of ``mover``'s motion to its next station."""
+        if self.answer is not None:
+            self.checks += 1
+            return [int(b) for b in self.answer(mover, arms)]
         leg = mover.leg
         if leg is None:
             return []

@@ -1,26 +1,24 @@
 """Coordination policies: the protocol every policy implements, and the registry.
 
 :func:`~workcell.simulate` takes ``coordination=<name>`` and builds the policy
-registered under that name (:data:`POLICIES`). Today one is registered:
-``"centralized"``, the S2.7 coordinator
-(:class:`~workcell.sim.coordination.centralized.Coordinator`). A policy is
-constructed with the compiled cell, the plan, the event loop, the link, the
-trace and the arms' ports (:class:`~workcell.sim.protocol.ports.ArmPort`);
-it talks to the arms through the link (station 0 receives, the arms are
-stations ``1..n``) and answers the harness through :class:`CoordinationPolicy`.
-
-A distributed policy (S2.7's last sentence, S2.4: more traffic) plugs in
-here: it would register a factory that builds one peer per arm on the same
-link (each a participant with its own state machine: per-zone mutual
-exclusion by request/reply in plan order, activations and emergency stops
-broadcast, an elected peer that re-solves through
-:func:`scheduler.reschedule`), and expose the same read-only results
-(task states and causes, the plan followed, the arms out).
+registered under that name (:data:`POLICIES`): ``"centralized"``, the S2.7
+coordinator (:class:`~workcell.sim.coordination.centralized.Coordinator`),
+and ``"distributed"``, one peer per arm and no coordinator
+(:class:`~workcell.sim.coordination.distributed.DistributedPolicy`: per-zone
+mutual exclusion by request/reply in plan order, activations and emergency
+stops broadcast, S2.4 and S2.7's last sentence). A policy is constructed
+with the compiled cell, the plan, the event loop, the link, the trace and
+the arms' ports (:class:`~workcell.sim.protocol.ports.ArmPort`); the
+centralized one talks to the arms through the link (station 0 receives,
+the arms are stations ``1..n``), the distributed one's peers share the
+arms' stations (a policy with ``colocated = True`` gets the controllers'
+messages to station 0 through ``controller_message``); both answer the
+harness through :class:`CoordinationPolicy`.
 
 Examples
 --------
 >>> sorted(POLICIES)
-['centralized']
+['centralized', 'distributed']
 """
 
 from __future__ import annotations
@@ -33,6 +31,7 @@ from scheduler import Problem, Schedule
 from workcell.compile import CompiledCell
 from workcell.sim.comms.link import Link
 from workcell.sim.coordination.centralized import Coordinator
+from workcell.sim.coordination.distributed import DistributedPolicy
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
 from workcell.sim.protocol.ports import ArmPort
@@ -103,7 +102,10 @@ class CoordinationPolicy(Protocol):
 PolicyFactory = Callable[..., CoordinationPolicy]
 """``factory(compiled, plan, loop, link, trace, arms, **settings)``."""
 
-POLICIES: dict[str, PolicyFactory] = {"centralized": Coordinator}
+POLICIES: dict[str, PolicyFactory] = {
+    "centralized": Coordinator,
+    "distributed": DistributedPolicy,
+}
 """Registered coordination policies by name."""
 
 

@@ -89,13 +89,19 @@ def arm_failed(self: _Self, a: int) -> None:
                 self.released.discard(piece)
                 self.held.pop(piece, None)
                 self.told_sleep.discard(piece)
+            if not self.resolving:  # failed with the others below (_fail_never)
+                self.cause[t] = (
+                    f"interrupted by the arm's failure: arm {p.arm_names[a]!r} failed "
+                    "(re-solving off: its tasks are not reassigned)"
+                )
+                self.cause_kind[t] = "arm_out"
+                continue
             self.trace.add(
                 self.kernel.now,
                 "task_failed",
                 arm=p.arm_names[a],
                 task=p.task_names[t],
-                detail="interrupted by the arm's failure; "
-                + ("reassigned by a re-solve" if self.resolving else "re-solving off"),
+                detail="interrupted by the arm's failure; reassigned by a re-solve",
             )
     self.resolve(f"arm {p.arm_names[a]!r} failed")
     self._serve_all()
@@ -230,6 +236,78 @@ def _withdraw(self: _Self, t: int) -> None:
     self.net.send(0, a + 1, "sleep", ("withdraw", -1, t, 0.0))
 
 
+def _fail_never(self: _Self) -> None:
+    """Re-solving off: the tasks that can no longer run under the kept plan
+    (on a failed arm, or after such a task: :attr:`never`) fail now, at the
+    instant that became known, each with its cause (a dispatched one is
+    withdrawn first); the arms go on with the rest of the plan."""
+    p = self.p
+    now = self.kernel.now
+    failed = False
+    for t in p.topological_order:
+        if t not in self.never or self.status[t] not in ("pending", "dispatched"):
+            continue
+        a = int(p.mode_arm[int(self.plan.mode[t])])
+        if self.cause[t]:
+            pass
+        elif all(int(p.mode_arm[m]) in self.failed_arms for m in p.task_modes[t]):
+            self.cause[t] = "no working arm can do it (every capable arm failed)"
+            self.cause_kind[t] = "arm_failed"
+        elif a in self.failed_arms:
+            self.cause[t] = (
+                f"arm {p.arm_names[a]!r} failed (re-solving off: its tasks are not reassigned)"
+            )
+            self.cause_kind[t] = "arm_out"
+        else:
+            q = next(q for q in sorted(p.task_preds[t]) if self.cause[q])
+            self.cause[t] = f"predecessor {p.task_names[q]!r} failed: {self.cause[q]}"
+            self.cause_kind[t] = "predecessor"
+        if self.status[t] == "dispatched":  # its arm waits at its start
+            self._withdraw(t)
+        self.set_status(t, TaskState.FAILED)
+        self.trace.add(
+            now, "task_failed", arm=p.arm_names[a], task=p.task_names[t], detail=self.cause[t]
+        )
+        failed = True
+    if failed:
+        self._build_orders()
+        self._serve_all()
+    for b in range(p.n_arms):
+        self._dispatch_next(b)
+
+
+def _fail_impossible(self: _Self) -> None:
+    """After a re-solve: the tasks no working arm can do (every capable arm
+    failed) and the tasks after them can never run, whatever later plans
+    say: they fail now, at the instant that became known, with their cause."""
+    p = self.p
+    now = self.kernel.now
+    root: dict[int, int] = {}
+    for t in p.topological_order:
+        if self.status[t] not in ("pending", "dispatched"):
+            continue
+        if all(int(p.mode_arm[m]) in self.failed_arms for m in p.task_modes[t]):
+            root[t] = t
+            self.cause[t] = "no working arm can do it (every capable arm failed)"
+            self.cause_kind[t] = "arm_failed"
+        else:
+            q = next((root[q] for q in sorted(p.task_preds[t]) if q in root), None)
+            if q is None:
+                continue
+            root[t] = q
+            self.cause[t] = (
+                f"predecessor {p.task_names[q]!r} cannot run: every arm able to do it failed"
+            )
+            self.cause_kind[t] = "predecessor"
+        if self.status[t] == "dispatched":  # its arm waits at its start
+            self._withdraw(t)
+        self.set_status(t, TaskState.FAILED)
+        a = int(p.mode_arm[int(self.plan.mode[t])])
+        self.trace.add(
+            now, "task_failed", arm=p.arm_names[a], task=p.task_names[t], detail=self.cause[t]
+        )
+
+
 def _withdraw_never(self: _Self) -> None:
     """Take back the dispatched tasks that can no longer run under the
     kept plan (a predecessor on a failed arm): their arms would wait at
@@ -249,7 +327,7 @@ def resolve(self: _Self, reason: str) -> None:
     if not self.resolving:
         self.trace.add(now, "resolve", detail=f"{reason}: re-solving off; plan kept")
         self._build_orders()  # a failed arm's tasks no longer hold others back
-        self._withdraw_never()
+        self._fail_never()
         return
     frozen: dict[int, FrozenTask] = {}
     changed = True
@@ -294,6 +372,7 @@ def resolve(self: _Self, reason: str) -> None:
             self.set_status(t, TaskState.PENDING)
     self.plan = new
     self.dropped = res.dropped
+    self._fail_impossible()
     self.plans.append(new)
     for t in range(p.n_tasks):
         if t not in res.dropped:

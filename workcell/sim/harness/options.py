@@ -15,22 +15,28 @@ multiarm.errors.UsageError: SimOptions.tick must be None or a period in [1e-05, 
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 
 from multiarm.errors import UsageError
 from workcell.sim.control.force import FREE_THRESHOLD, HOLE_SIGMA, check_insertion
+from workcell.sim.protocol.ports import ArmPort
 
-__all__ = ["CONTROL_TIME", "COORDINATION_POLICIES", "RANGES", "SimOptions"]
+__all__ = ["CONTROL_TIME", "COORDINATION_POLICIES", "RANGES", "GuardAnswer", "SimOptions"]
 
 CONTROL_TIME = 1.25e-4
 """Seconds of one CPU's time to control one arm for one sampling period
 (S2.2: an i860 ran 8 four-axis SCARA arms at 1 ms, so at most 1/8 ms each)."""
 
-COORDINATION_POLICIES: tuple[str, ...] = ("centralized",)
+COORDINATION_POLICIES: tuple[str, ...] = ("centralized", "distributed")
 """The coordination policies :func:`workcell.simulate` knows (S2.7's
 centralized coordinator)."""
+
+
+GuardAnswer = Callable[[ArmPort, Sequence[ArmPort]], Sequence[int]]
+"""``answer(mover, arms) -> indices of the arms in mover's way``: a stand-in
+for the coordinator's geometric check (:attr:`SimOptions.guard_answer`)."""
 
 
 RANGES: dict[str, tuple[float, float]] = {
@@ -38,10 +44,13 @@ RANGES: dict[str, tuple[float, float]] = {
     "tick": (1e-5, 0.1),
     "monitor_period": (1e-4, 1.0),
     "control_time": (1e-7, 0.1),
+    "detour_checks": (1, 10_000_000),
 }
-"""Physical range, seconds, of each numeric field: a controller samples every
-10 us to 100 ms (S2.2: 1 ms), the monitor at least once a second and at most
-every 0.1 ms (finer samples cost time without finding more)."""
+"""Physical range of each numeric field, seconds unless said: a controller
+samples every 10 us to 100 ms (S2.2: 1 ms), the monitor at least once a
+second and at most every 0.1 ms (finer samples cost time without finding
+more); ``detour_checks`` counts configuration checks (about 10 us each, so
+at most about 100 s of planning per detour)."""
 
 
 def _positive(name: str, value: object, unit: str) -> float:
@@ -109,6 +118,23 @@ class SimOptions:
         ``True``: the coordinator's geometric check before each motion
         (S2.6, S2.12: stop, detour, back off). ``False`` lets arms move
         into each other: an ablation for testing the safety monitor.
+    detours : bool
+        ``True``: an arm the geometric check stops, with only standing arms
+        in its way, gets S2.12's alternative trajectory (an OMPL path around
+        them over the stretch of its motion that touches them). ``False``:
+        it waits for the way to clear, or the standing arms back off (S2.6):
+        an ablation for comparing runs with and without detours.
+    detour_checks : int
+        Work limit of one detour search, configuration checks: a search
+        that needs more answers "no detour" (the same seed plans the same
+        path on any machine).
+    guard_answer : callable, optional
+        ``guard_answer(mover, arms) -> indices of the arms in mover's way``
+        (arms as :class:`~workcell.sim.protocol.ports.ArmPort`), asked in
+        place of the coordinator's geometric check before each motion; only
+        with ``geometry_guard``. ``None``: the check decides. An ablation for
+        tests that need geometric stops (oscillating, permanent, on one
+        stretch) that no built-in cell produces.
     strict : bool
         On a stall (an arm with work, no stop in force and no event pending:
         a bug of the simulator itself) raise
@@ -129,11 +155,26 @@ class SimOptions:
     force_threshold: float | Mapping[str, float] = FREE_THRESHOLD
     zone_protocol: bool = True
     geometry_guard: bool = True
+    detours: bool = True
+    detour_checks: int = 10_000
+    guard_answer: GuardAnswer | None = None
     strict: bool = False
 
     def __post_init__(self) -> None:
-        for name in ("resolve", "zone_protocol", "geometry_guard", "strict"):
+        for name in ("resolve", "zone_protocol", "geometry_guard", "detours", "strict"):
             _flag(name, getattr(self, name))
+        lo, hi = RANGES["detour_checks"]
+        dc = self.detour_checks
+        if isinstance(dc, bool) or not isinstance(dc, int) or not lo <= dc <= hi:
+            raise UsageError(
+                f"SimOptions.detour_checks must be an integer in [{lo:g}, {hi:g}] "
+                f"configuration checks, got {dc!r}"
+            )
+        if self.guard_answer is not None and not callable(self.guard_answer):
+            raise UsageError(
+                "SimOptions.guard_answer must be None or a callable (mover, arms) -> arm "
+                f"indices, got {self.guard_answer!r}"
+            )
         if not (isinstance(self.monitor, bool) or self.monitor in ("live", "post")):
             raise UsageError(
                 f"SimOptions.monitor must be True, False, 'live' or 'post', got {self.monitor!r}"

@@ -193,7 +193,6 @@ def build_result(
                 logs[t] = (c.index, log)
             elif t not in started or log.start > started[t][1].start:
                 started[t] = (c.index, log)
-    trace.sort()
     tasks: list[dict[str, Any]] = []
     for t in range(T):
         k = coord.plan_of[t]
@@ -223,15 +222,19 @@ def build_result(
             end = float(begun[1].end) if begun is not None and begun[1].finished else math.nan
             row.update(arm=p.arm_names[a], mode=m, start=start, end=end, status="failed")
             row["cause_kind"], row["cause"] = _cause(coord, t, strict)
-            trace.add(
-                kernel.now,
-                "task_failed",
-                arm=p.arm_names[a],
-                task=p.task_names[t],
-                detail=row["cause"],
-            )
+            if coord.status[t] != "failed":
+                # found only now, at the end of the run (the coordinator logged
+                # the tasks it failed when it failed them)
+                trace.add(
+                    t_end,
+                    "task_failed",
+                    arm=p.arm_names[a],
+                    task=p.task_names[t],
+                    detail=row["cause"],
+                )
         row["plan"] = k
         tasks.append(row)
+    trace.sort()
     # executed schedule
     executed: Schedule | None = None
     if len(logs) == T:

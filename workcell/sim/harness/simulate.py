@@ -39,7 +39,7 @@ from workcell.sim.comms.media import make_medium
 from workcell.sim.comms.medium import Medium
 from workcell.sim.control.controller import ArmController, Ticker
 from workcell.sim.control.force import free_thresholds, insert_searches
-from workcell.sim.coordination.policy import CoordinationPolicy, make_policy
+from workcell.sim.coordination.policy import POLICIES, CoordinationPolicy, make_policy
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
 from workcell.sim.harness.faults import (
@@ -192,9 +192,11 @@ def simulate(
         A medium name (``"ideal"``, ``"fixed"`` and the names of
         :mod:`workcell.sim.comms`) or ``factory(kernel, stations) -> Medium``.
         Station 0 is the coordinator, station ``i`` the ``i``-th arm.
-    coordination : {"centralized"}
+    coordination : {"centralized", "distributed"}
         The coordination policy (:data:`~workcell.sim.harness.options.COORDINATION_POLICIES`):
-        ``"centralized"`` is the S2.7 coordinator.
+        ``"centralized"`` is the S2.7 coordinator, ``"distributed"`` one peer
+        per arm and no coordinator
+        (:mod:`workcell.sim.coordination.distributed`).
     options : SimOptions, optional
         Re-solving, sampling period, monitor, insertion and force settings,
         ablations (:class:`~workcell.sim.harness.options.SimOptions`); default
@@ -255,6 +257,7 @@ def simulate(
         validate(p, schedule)
     fplan = as_plan(faults)
     _check_faults(fplan, cc)
+    factory: Any = POLICIES[coordination]
     seed = int(seed)
     thresholds = free_thresholds(options.force_threshold, p.arm_names)
     searches = (
@@ -273,6 +276,17 @@ def simulate(
     rng = np.random.default_rng(seed)
     names = ["coordinator", *p.arm_names]
     net = Link(kernel, med, trace, names, loss, rng)
+    # a policy whose peers share the arms' stations (``colocated``) takes a
+    # controller's messages to station 0 from the controller itself
+    policy_box: list[Any] = []
+
+    def local_send(src: int, dst: int, kind: str, payload: Any) -> None:
+        if dst == 0:
+            policy_box[0].controller_message(src, kind, payload)
+        else:  # pragma: no cover - controllers send to station 0 only
+            net.send(src, dst, kind, payload)
+
+    send = local_send if getattr(factory, "colocated", False) else net.send
     period = float(tick) if tick is not None else 1e-3
     ticker = Ticker(kernel, period) if tick is not None else None
     arms: list[ArmController] = []
@@ -282,7 +296,7 @@ def simulate(
             a,
             arm,
             q0,
-            net.send,
+            send,
             trace,
             period,
             ticker,
@@ -312,7 +326,11 @@ def simulate(
         zone_checks=options.zone_protocol,
         geometry=options.geometry_guard,
         resolving=resolve,
+        detours=options.detours,
+        detour_checks=options.detour_checks,
+        guard_answer=options.guard_answer,
     )
+    policy_box.append(coord)
     _connect(coord, arms, geometry=options.geometry_guard)
     arm_index = {n: i for i, n in enumerate(p.arm_names)}
     arrivals = cc.cell.taskset.expected_arrivals()

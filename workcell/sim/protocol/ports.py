@@ -63,8 +63,10 @@ class ArmPort(Protocol):
     def back_off(self, until: tuple[int, Any, int]) -> bool:
         """Retreat to the home joints out of a mover's way (S2.6)."""
 
-    def take_detour(self, traj: JointTrajectory, task: int) -> None:
-        """Go to the next station along ``traj`` (S2.12 alternative trajectory)."""
+    def take_detour(self, traj: JointTrajectory, task: int, rejoin: float | None = None) -> None:
+        """Go along ``traj`` (S2.12 alternative trajectory) to the leg offset
+        ``rejoin`` (default: the next station), keeping the reservations of
+        the stations it passes."""
 
     def come_back(self) -> None:
         """Return from a back-off."""

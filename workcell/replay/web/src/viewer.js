@@ -8,8 +8,10 @@
 // bodies at the slider's time (linear interpolation between samples),
 // colours each zone by its state, and draws the Gantt strip with a cursor.
 //
+// Tools stand at their racks and ride on the arm that holds them.
+//
 // For tests and embedding it sets window.multiarmReplay = {ready, duration,
-// setTime(t), time(), play(), pause(), error}.
+// setTime(t), time(), toolAt(name), play(), pause(), error}.
 
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
@@ -245,6 +247,44 @@ async function main() {
     }
   }
 
+  // ---- tools: a small dark cylinder standing on a plate at its rack; while
+  // an arm holds it (the run's tool reservations), carried at the arm's tip
+  // body, along that body's z axis
+  const toolGeometry = new THREE.CylinderGeometry(0.018, 0.018, 0.12, 16);
+  toolGeometry.rotateX(Math.PI / 2);
+  const toolMaterial = new THREE.MeshStandardMaterial({ color: 0x2b2b2b, roughness: 0.35, metalness: 0.4 });
+  const plateGeometry = new THREE.BoxGeometry(0.08, 0.08, 0.01);
+  const plateMaterial = new THREE.MeshStandardMaterial({ color: 0x6b6b6b, roughness: 0.8 });
+  const tools = (data.tools || []).map((tool) => {
+    const mesh = new THREE.Mesh(toolGeometry, toolMaterial);
+    mesh.matrixAutoUpdate = false;
+    scene.add(mesh);
+    const plate = new THREE.Mesh(plateGeometry, plateMaterial);
+    plate.position.set(tool.rack[0], tool.rack[1], tool.rack[2] - 0.065);
+    scene.add(plate);
+    return { tool, mesh, arm: -1 };
+  });
+  function toolsAt(t) {
+    for (const entry of tools) {
+      const h = entry.tool.held.find((x) => x.start <= t && t < x.end);
+      const tip = h ? data.arms[h.arm].tip : -1;
+      if (h && tip !== undefined && tip >= 0) {
+        entry.mesh.matrix.copy(bodies[tip].matrix);
+        entry.arm = h.arm;
+      } else {
+        entry.mesh.matrix.makeTranslation(...entry.tool.rack);
+        entry.arm = -1;
+      }
+      entry.mesh.matrixWorldNeedsUpdate = true;
+    }
+  }
+  function toolAt(name) {
+    const entry = tools.find((x) => x.tool.name === name);
+    if (!entry) return null;
+    const p = new THREE.Vector3().setFromMatrixPosition(entry.mesh.matrix);
+    return { position: [p.x, p.y, p.z], arm: entry.arm };
+  }
+
   // ---- zone states over time
   const intervals = data.zone_states;
   const rank = { waiting: 3, moving: 2, occupied: 1 };
@@ -463,6 +503,7 @@ async function main() {
   function show(t) {
     now = Math.min(Math.max(t, 0), T);
     poseAt(now);
+    toolsAt(now);
     zonesAt(now);
     faultsAt(now);
     drawGantt(now);
@@ -527,6 +568,7 @@ async function main() {
       show(t);
     },
     time: () => now,
+    toolAt,
     play,
     pause,
     ready: true,

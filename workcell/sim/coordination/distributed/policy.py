@@ -1,0 +1,308 @@
+"""``coordination="distributed"``: one peer per arm, no coordinator (S2.4, S2.7).
+
+:class:`DistributedPolicy` builds one :class:`~.peer.Peer` per arm at the
+arm's station and routes the frames of that station: peer records
+(:mod:`workcell.sim.protocol.peers`) to the peer, the controller's own
+messages to the peer without the medium (they share the station). It holds
+no decision of its own: it publishes what the harness reads (each task's
+state and cause, written by the peer of the task's arm) and hands each
+fault to the peer where it happens.
+
+Faults under this policy:
+
+* ``message_loss``: the link sends a lost peer frame again (as every frame).
+* ``crash``, ``lost_sync``: local to the arm's controller (its peer is told
+  of a reflex stop after the fact).
+* ``emergency_stop``: raised at the station of the lowest working arm, whose
+  peer stops its arm and broadcasts the alarm to the other peers, then its
+  release ``duration`` seconds later (matched by id at every controller).
+* ``late_part``: the feeder's notice reaches the peers of the gated tasks;
+  each holds its task until the part comes (the plan is kept: no re-solve;
+  a task dispatched with its start allowed is withdrawn and sent again).
+  A part that never comes fails its tasks and, through notices, every task
+  after them.
+* ``activate_zones``: raised at the lowest working arm's station; its peer
+  broadcasts the stop, every peer stops its arm (and dispatches nothing
+  new) and answers once its controller stands; with every working arm's
+  answer in, the raiser broadcasts the change and every arm goes on (stops
+  and releases matched by id). The peers keep their mutual exclusion over
+  every zone of the plan, active or not.
+* ``arm_failure``: the failed arm's station sends its last frame
+  (:class:`~workcell.sim.protocol.peers.ArmOut`) to every peer. Its uses of
+  every resource then hold no one back, and each peer fails its tasks that
+  come after an unfinished task of the failed arm (and tells the peers of
+  their successors). There is no re-solve under this policy: the plan is
+  kept, as with ``SimOptions(resolve=False)`` under the centralized
+  coordinator, whatever ``resolve`` says.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from multiarm.errors import InternalError, UsageError
+from scheduler import Problem, Schedule
+from workcell.compile import CompiledCell
+from workcell.sim.comms.link import Link
+from workcell.sim.comms.medium import BROADCAST, Frame
+from workcell.sim.coordination.distributed import geometry
+from workcell.sim.coordination.distributed.peer import Peer
+from workcell.sim.coordination.distributed.plan import arm_of, resource_orders
+from workcell.sim.coordination.guard import GeometryGuard
+from workcell.sim.events.loop import EventLoop, Handle
+from workcell.sim.events.trace import Trace
+from workcell.sim.protocol.messages import Piece
+from workcell.sim.protocol.peers import PEER_RECORDS, Activation, Alarm, Resource
+from workcell.sim.protocol.ports import ArmPort
+from workcell.sim.protocol.states import TASK_MACHINE, TaskState
+
+__all__ = ["DistributedPolicy"]
+
+_PEER_TYPES = (*PEER_RECORDS, Alarm, Activation)
+
+
+class DistributedPolicy:
+    """Distributed coordination: one :class:`Peer` per arm (module docstring).
+
+    Parameters are those of every policy
+    (:data:`~workcell.sim.coordination.policy.PolicyFactory`);
+    ``resolve_budget`` and ``resolve_evaluations`` are kept for the records
+    (this policy never re-solves), ``zone_checks=False`` grants every use at
+    once (tests of the safety monitor only), ``geometry`` runs each arm's
+    check before it sets off (S2.12); ``detours``, ``detour_checks`` and
+    ``guard_answer`` are the :class:`~workcell.sim.harness.options.SimOptions`
+    fields of the same names (alternative trajectories on or off, the detour
+    search's work limit, a stand-in for the geometric check's answer).
+    """
+
+    colocated = True
+    """The peers share the arms' stations: a controller's messages to
+    station 0 go to its own peer (:meth:`controller_message`)."""
+
+    def __init__(
+        self,
+        compiled: CompiledCell,
+        plan: Schedule,
+        kernel: EventLoop,
+        net: Link,
+        trace: Trace,
+        arms: Sequence[ArmPort],
+        *,
+        seed: int = 0,
+        resolve_budget: float = 0.015,
+        resolve_evaluations: int = 200,
+        zone_checks: bool = True,
+        geometry: bool = True,
+        resolving: bool = True,
+        detours: bool = True,
+        detour_checks: int = 10_000,
+        guard_answer: Callable[[ArmPort, Sequence[ArmPort]], Sequence[int]] | None = None,
+    ) -> None:
+        self.cc = compiled
+        self.p: Problem = compiled.problem
+        self.plan = plan
+        self.kernel = kernel
+        self.link = net
+        self.trace = trace
+        self.arms: list[ArmPort] = list(arms)
+        self.seed = seed
+        self.resolve_budget = float(resolve_budget)
+        self.resolving = False
+        del resolve_evaluations, resolving
+        p = self.p
+        T, A = p.n_tasks, p.n_arms
+        self.status: list[TaskState] = [TaskState.PENDING] * T
+        self.cause = [""] * T
+        self.cause_kind = [""] * T
+        self.plans: list[Schedule] = [plan]
+        self.plan_of: list[int] = [0] * T
+        self.dropped: frozenset[int] = frozenset()
+        self.failed_arms: set[int] = set()
+        self.resolves = 0
+        self.resolve_latency: list[float] = []
+        self.detours = 0
+        self.geo_held: dict[int, list[int]] = {}
+        self.orders: dict[Resource, list[Piece]] = resource_orders(p, plan) if zone_checks else {}
+        self.position: dict[Piece, int] = {
+            piece: i for order in self.orders.values() for i, piece in enumerate(order)
+        }
+        self.start_pieces: list[list[Piece]] = [
+            [
+                Piece("zone", int(z), -1 - a, 0.0)
+                for z in p.arm_start_zones[a]
+                if p.zone_exclusive[z]
+            ]
+            for a in range(A)
+        ]
+        self._stop_ids = itertools.count(1)
+        self.guard = (
+            GeometryGuard(compiled, clock=lambda: kernel.now, answer=guard_answer)
+            if geometry
+            else None
+        )
+        self._recheck_h: Handle | None = None
+        self.stalled = 0
+        self.max_stalled = 200
+        self._recheck_at = -1.0
+        self._recheck_n = 0
+        self.recheck_limit = 8 + 4 * A
+        self.backoffs = 0
+        self.max_backoffs = 2 * T + 2
+        self.detour_tried: set[tuple[int, int, int]] = set()
+        self.detour_checks = int(detour_checks)
+        self.detours_on = bool(detours)
+        """Work limit of one OMPL detour search (validity checks)."""
+        self.peers: list[Peer] = []
+        for a in range(A):
+            ctl_rx = net.receivers.get(a + 1)
+            if ctl_rx is None:
+                raise UsageError(f"distributed coordination: no controller at station {a + 1}")
+            peer = Peer(self, a, self._local(a, ctl_rx))
+            self.peers.append(peer)
+            net.receivers[a + 1] = self._router(a, peer, ctl_rx)
+        net.receivers[0] = self._from_controller
+
+    # ------------------------------------------------------------ plumbing
+    def owner(self, piece: Piece) -> int:
+        """The arm that makes use ``piece``."""
+        return -1 - piece.task if piece.task < 0 else arm_of(self.p, self.plan, piece.task)
+
+    def resource_name(self, piece: Piece) -> str:
+        """The zone's or tool's name."""
+        if piece.kind == "tool":
+            return str(self.p.tool_names[piece.resource])
+        return str(self.p.zone_names[piece.resource])
+
+    def set_status(self, t: int, new: TaskState) -> None:
+        """Move task ``t`` to ``new`` (checked against the task machine)."""
+        TASK_MACHINE.check(self.status[t], new)
+        self.status[t] = new
+
+    def _local(self, a: int, ctl_rx: Any) -> Any:
+        station = a + 1
+
+        def deliver(kind: str, payload: Any) -> None:
+            frame = Frame(src=0, dst=station, size=1, kind=kind, payload=(payload, 0))
+            self.kernel.schedule(0.0, ctl_rx, frame)
+
+        return deliver
+
+    def _router(self, a: int, peer: Peer, ctl_rx: Any) -> Any:
+        def rx(frame: Frame) -> None:
+            payload = frame.payload[0]  # type: ignore[index]
+            if a in self.failed_arms:
+                return  # the arm's station is silent
+            if isinstance(payload, _PEER_TYPES):
+                peer.from_peer(frame.src - 1, frame.kind, payload)
+            else:  # pragma: no cover - nothing else is sent to an arm's station
+                ctl_rx(frame)
+
+        return rx
+
+    def _from_controller(self, frame: Frame) -> None:
+        """Station 0 has no coordinator: a peer's broadcast reaches it and is
+        not read; any other frame there is a bug."""
+        if frame.dst == BROADCAST:
+            return
+        raise InternalError(  # pragma: no cover - every arm's messages stay at its station
+            f"distributed coordination: arm station {frame.src} sent {frame.kind!r} to station 0"
+        )
+
+    def controller_message(self, src: int, kind: str, payload: Any) -> None:
+        """A controller's message to its own peer (the same station; no medium:
+        handed over as a new event at the same instant, as the ideal medium)."""
+        if src - 1 not in self.failed_arms:
+            self.kernel.schedule(0.0, self.peers[src - 1].from_controller, kind, payload)
+
+    # ------------------------------------------------------------ policy protocol
+    def start(self) -> None:
+        """Every peer dispatches its arm's first task."""
+        for peer in self.peers:
+            peer.start()
+
+    def task_started(self, a: int, t: int, now: float) -> None:
+        """Port: arm ``a`` left task ``t``'s start station."""
+        self.set_status(t, TaskState.RUNNING)
+        self.stalled = 0
+        self.trace.add(now, "task_start", arm=self.p.arm_names[a], task=self.p.task_names[t])
+
+    def task_ended(self, a: int, t: int, now: float) -> None:
+        """Port: arm ``a`` ended task ``t``'s trajectory."""
+        self.stalled = 0
+        self.trace.add(now, "task_end", arm=self.p.arm_names[a], task=self.p.task_names[t])
+
+    def arm_failed(self, a: int) -> None:
+        """Fault: arm ``a`` fails for good (its peer with it, after its last frame)."""
+        if a in self.failed_arms:
+            return
+        self.failed_arms.add(a)
+        self.arms[a].fail()
+        self.trace.add(self.kernel.now, "fault", arm=self.p.arm_names[a], detail="arm failure")
+        self.peers[a].fail()
+        self.arm_moved()  # it left its place (retracted home): the held arms look again
+
+    def _raiser(self) -> int:
+        """The lowest working arm (where a cell-wide fault is raised)."""
+        return min(x for x in range(self.p.n_arms) if x not in self.failed_arms)
+
+    def activate(self, zones: tuple[str, ...]) -> None:
+        """Fault: change the active zones (S2.5), raised at the lowest working arm."""
+        if len(self.failed_arms) == self.p.n_arms:
+            return
+        a = self._raiser()
+        self.trace.add(
+            self.kernel.now,
+            "fault",
+            arm=self.p.arm_names[a],
+            detail=f"zone activation {', '.join(zones)} (raised by arm {self.p.arm_names[a]!r})",
+        )
+        self.peers[a].raise_activation(next(self._stop_ids), tuple(zones))
+
+    def emergency_stop(self, duration: float) -> None:
+        """The stop is raised at the lowest working arm's station; its peer
+        stops its arm and broadcasts the alarm, and its release later."""
+        if len(self.failed_arms) == self.p.n_arms:
+            return
+        a = self._raiser()
+        stop = next(self._stop_ids)
+        self.trace.add(
+            self.kernel.now,
+            "fault",
+            arm=self.p.arm_names[a],
+            detail=f"emergency stop for {duration:g} s (broadcast by arm {self.p.arm_names[a]!r})",
+        )
+        self.peers[a].from_peer(a, "alarm", Alarm(stop, True))
+        self.link.send(a + 1, BROADCAST, "alarm", Alarm(stop, True))
+        self.kernel.schedule(duration, self._clear_alarm, a, stop)
+
+    def _clear_alarm(self, a: int, stop: int) -> None:
+        if a in self.failed_arms:  # the raiser failed: the next working arm releases it
+            if len(self.failed_arms) == self.p.n_arms:
+                return
+            a = self._raiser()
+        self.trace.add(
+            self.kernel.now, "fault", arm=self.p.arm_names[a], detail="emergency stop cleared"
+        )
+        self.peers[a].from_peer(a, "wake_up", Alarm(stop, False))
+        self.link.send(a + 1, BROADCAST, "wake_up", Alarm(stop, False))
+
+    def part_late(self, tasks: list[int], arrival: float, part: str) -> None:
+        """The feeder's notice reaches the peers of the gated tasks."""
+        self.parts_late([(tasks, arrival, part)])
+
+    def parts_late(self, notices: Sequence[tuple[list[int], float, str]]) -> None:
+        """Parts found late at one instant, ``(tasks, arrival, part)`` each."""
+        for tasks, arrival, part in notices:
+            when = "never comes" if arrival == float("inf") else f"comes at {arrival:.6g} s"
+            self.trace.add(self.kernel.now, "fault", detail=f"part {part!r} is late: {when}")
+            for t in tasks:
+                self.peers[arm_of(self.p, self.plan, t)].part_late(t, arrival, part)
+
+    # ------------------------------------------------------------ geometry (S2.12)
+    check_departure = geometry.check_departure
+    check_way = geometry.check_way
+    arm_moved = geometry.arm_moved
+    _recheck = geometry.recheck
+    _try_detour = geometry.try_detour
