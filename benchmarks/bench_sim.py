@@ -18,7 +18,8 @@ Side by side in one run, on one plan (the tree search's, seeded):
   the re-solve latency (p50/p99 over every re-solve of every scenario) and
   the executed makespan and failed tasks with and without re-solving.
 
-Targets (issue): >= 2000x at event level, >= 100x at 1 ms ticks.
+Targets (issue): >= 2000x at event level with the monitor off, >= 1000x at
+event level with the live monitor, >= 200x at 1 ms ticks.
 
 A thin wrapper of the sweep ``benchmarks/sweeps/sim.toml`` (one
 ``benchmark`` run of :func:`measure`: the whole table); it measures again on
@@ -51,17 +52,21 @@ from workcell.sim.harness.simulate import simulate
 
 NAME = "sim"
 EVENT_TARGET = 2000.0
-TICK_TARGET = 100.0
+LIVE_TARGET = 1000.0
+TICK_TARGET = 200.0
 
 
 def _speed(cc: Any, plan: Any, repeat: int, **kw: Any) -> dict[str, Any]:
-    """Best simulated-seconds-per-wall-second over ``repeat`` runs."""
-    rates, walls = [], []
+    """Best simulated-seconds-per-wall-second over ``repeat`` runs (and the
+    least process CPU time, which a loaded machine inflates less)."""
+    rates, walls, cpus = [], [], []
     last = None
     for _ in range(repeat):
+        c0 = time.process_time()
         t0 = time.perf_counter()
         last = simulate(cc, plan, seed=0, options=SimOptions(**kw))
         wall = time.perf_counter() - t0
+        cpus.append(time.process_time() - c0)
         walls.append(wall)
         rates.append(float(last.metrics.executed_makespan) / wall)
     assert last is not None
@@ -70,6 +75,7 @@ def _speed(cc: Any, plan: Any, repeat: int, **kw: Any) -> dict[str, Any]:
         "rate": max(rates),
         "rates": rates,
         "wall_s": min(walls),
+        "cpu_s": min(cpus),
         "simulated_s": float(m.executed_makespan),
         "events": int(m.events),
         "ticks": int(m.ticks),
@@ -228,7 +234,11 @@ def measure(
         "tick_level": ticked,
         "monitored": monitors["live"],
         "monitored_post_run": monitors["post"],
-        "targets": {"event_level": EVENT_TARGET, "tick_level": TICK_TARGET},
+        "targets": {
+            "event_level": EVENT_TARGET,
+            "monitored": LIVE_TARGET,
+            "tick_level": TICK_TARGET,
+        },
         "resolve_latency_ms": (np.asarray(latencies) * 1e3).tolist(),
         "scenarios": scen,
     }
@@ -250,6 +260,10 @@ def table(r: Any) -> str:
     def verdict(rate: float, target: float) -> str:
         return "met" if rate >= target else f"**missed** ({rate / target:.2f} of the target)"
 
+    def cpu_rate(m: dict[str, Any]) -> str:
+        cpu = m.get("cpu_s")  # absent from results measured before it was recorded
+        return f"{m['simulated_s'] / cpu:.0f}x" if cpu else "-"
+
     def fmt(x: float | None) -> str:
         return f"{x:.1f}" if x is not None and math.isfinite(x) else "-"
 
@@ -261,26 +275,29 @@ def table(r: Any) -> str:
         "runs (ticks: of "
         f"{max(1, repeat - 1)}). One process on a shared 2-core machine.",
         "",
-        "| run | simulated s | wall s | simulated s per wall s | target | kernel events | ticks |",
-        "|---|---|---|---|---|---|---|",
+        "| run | simulated s | wall s | simulated s per wall s | target | simulated s per CPU s "
+        "| kernel events | ticks |",
+        "|---|---|---|---|---|---|---|---|",
         f"| event level (monitor off) | {event['simulated_s']:.1f} | {event['wall_s']:.3f} | "
         f"{event['rate']:.0f}x | >= {EVENT_TARGET:.0f}x: {verdict(event['rate'], EVENT_TARGET)} | "
-        f"{event['events']} | {event['ticks']} |",
+        f"{cpu_rate(event)} | {event['events']} | {event['ticks']} |",
         f"| every {r['tick'] * 1e3:g} ms tick, all {n_arms} arms (monitor off) | "
         f"{tick['simulated_s']:.1f} | {tick['wall_s']:.3f} | {tick['rate']:.0f}x | "
-        f">= {TICK_TARGET:.0f}x: {verdict(tick['rate'], TICK_TARGET)} | {tick['events']} | "
-        f"{tick['ticks']} |",
+        f">= {TICK_TARGET:.0f}x: {verdict(tick['rate'], TICK_TARGET)} | {cpu_rate(tick)} | "
+        f"{tick['events']} | {tick['ticks']} |",
         *(
             (
                 f"| event level, safety monitor on ({label}) | {m['simulated_s']:.1f} | "
-                f"{m['wall_s']:.3f} | {m['rate']:.0f}x | - | {m['events']} | {m['ticks']} |"
+                f"{m['wall_s']:.3f} | {m['rate']:.0f}x | "
+                + (f">= {target:.0f}x: {verdict(m['rate'], target)}" if target is not None else "-")
+                + f" | {cpu_rate(m)} | {m['events']} | {m['ticks']} |"
                 if "error" not in m
                 else f"| event level, safety monitor on ({label}) | - | - | - | - | the monitor "
-                f"stopped the run: {m['error']} | - |"
+                f"stopped the run: {m['error']} | - | - |"
             )
-            for label, m in (
-                ("live, the default", monitors["live"]),
-                ("post-run check", monitors["post"]),
+            for label, m, target in (
+                ("live, the default", monitors["live"], LIVE_TARGET),
+                ("post-run check", monitors["post"], None),
             )
         ),
         *(

@@ -99,7 +99,7 @@ class Link:
         if seq < 0:
             seq = self._next_seq.get((src, dst), 0)
             self._next_seq[(src, dst)] = seq + 1
-        frame = Frame(src=src, dst=dst, size=size, kind=kind, payload=(payload, retry), seq=seq)
+        frame = Frame(src, dst, size, kind, 0, (payload, retry), self.kernel.now, seq=seq)
         self.sent += 1
         if retry:
             self.retransmissions += 1

@@ -357,10 +357,14 @@ class BaseMedium:
         ValidationError
             For an unknown source or destination station.
         """
-        self._check_station(frame.src, f"send ({frame.kind}) src")
-        if frame.dst != BROADCAST:
+        n = self.n_stations
+        if not 0 <= frame.src < n:
+            self._check_station(frame.src, f"send ({frame.kind}) src")
+        if frame.dst != BROADCAST and not 0 <= frame.dst < n:
             self._check_station(frame.dst, f"send ({frame.kind}) dst")
-        stamped = replace(frame, send_time=self.kernel.now)
+        now = self.kernel.now
+        # a frame already stamped with now (the link does so) is sent as is
+        stamped = frame if frame.send_time == now else replace(frame, send_time=now)
         self._transmit(stamped)
         return stamped
 

@@ -49,8 +49,9 @@ from __future__ import annotations
 import bisect
 import itertools
 import math
-from collections.abc import Callable, Sequence
-from typing import Any
+from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Set as AbstractSet
+from typing import Any, Self
 
 import numpy as np
 
@@ -69,6 +70,62 @@ from zones import ZoneManager
 from zones.manager import ReportOnly
 
 __all__ = ["CAUSE_KINDS", "Coordinator"]
+
+
+class _Released(set[Piece]):
+    """The set of released resource uses, counting what leaves it.
+
+    ``shrunk`` grows whenever a use is taken out again (an arm failure or a
+    withdrawal hands its task's uses back to the plan), so a cached scan
+    position in a resource's order (:meth:`Coordinator._grantable`) is
+    known to be stale.
+    """
+
+    __slots__ = ("shrunk",)
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.shrunk = 0
+
+    def discard(self, piece: object) -> None:
+        self.shrunk += 1
+        super().discard(piece)
+
+    def remove(self, piece: Piece) -> None:
+        self.shrunk += 1
+        super().remove(piece)
+
+    def pop(self) -> Piece:
+        self.shrunk += 1
+        return super().pop()
+
+    def clear(self) -> None:
+        self.shrunk += 1
+        super().clear()
+
+    def difference_update(self, *others: Iterable[Any]) -> None:
+        self.shrunk += 1
+        super().difference_update(*others)
+
+    def intersection_update(self, *others: Iterable[Any]) -> None:
+        self.shrunk += 1
+        super().intersection_update(*others)
+
+    def symmetric_difference_update(self, other: Iterable[Piece]) -> None:
+        self.shrunk += 1
+        super().symmetric_difference_update(other)
+
+    def __isub__(self, other: AbstractSet[object]) -> Self:
+        self.shrunk += 1
+        return super().__isub__(other)
+
+    def __iand__(self, other: AbstractSet[object]) -> Self:
+        self.shrunk += 1
+        return super().__iand__(other)
+
+    def __ixor__(self, other: AbstractSet[Any]) -> Self:  # type: ignore[override, misc]
+        self.shrunk += 1
+        return super().__ixor__(other)
 
 
 class Coordinator:
@@ -153,7 +210,10 @@ class Coordinator:
         self.pending: list[list[Piece]] = [[] for _ in range(A)]
         self.zm_wait: list[Piece | None] = [None] * A
         self.told_sleep: set[Piece] = set()
-        self.released: set[Piece] = set()
+        self.released: set[Piece] = _Released()
+        self._heads: dict[tuple[str, int], tuple[list[Piece], int, int]] = {}
+        """Per resource: (its order list, ``released.shrunk``, index of the
+        first use in it not released), the scan position of :meth:`_grantable`."""
         self.held: dict[Piece, int] = {}
         self.orders: dict[tuple[str, int], list[Piece]] = {}
         self.plans: list[Schedule] = [plan]
@@ -291,14 +351,34 @@ class Coordinator:
         self.orders = {k: [x[3] for x in sorted(v, key=lambda x: x[:3])] for k, v in orders.items()}
 
     def _grantable(self, piece: Piece) -> bool:
+        """Every use of ``piece``'s resource that the order puts before it is
+        released (the first use not released is ``piece``, or there is none).
+
+        The uses before the first one not released stay released (until
+        the set shrinks, or the order list is rebuilt), so the scan goes
+        on from where the last one stopped."""
         if not self.zone_checks:
             return True
-        for q in self.orders.get((piece[0], piece[1]), ()):
-            if q == piece:
-                return True
-            if q not in self.released:
-                return False
-        return True
+        key = (piece[0], piece[1])
+        order = self.orders.get(key)
+        if not order:
+            return True
+        released = self.released
+        if piece in released:  # rare: a use asked for again after its release
+            for q in order:
+                if q == piece:
+                    return True
+                if q not in released:
+                    return False
+            return True
+        shrunk = getattr(released, "shrunk", -1)
+        head = self._heads.get(key)
+        i = head[2] if head is not None and head[0] is order and head[1] == shrunk >= 0 else 0
+        n = len(order)
+        while i < n and order[i] in released:
+            i += 1
+        self._heads[key] = (order, shrunk, i)
+        return i == n or order[i] == piece
 
     # ------------------------------------------------------------ dispatch
     def start(self) -> None:

@@ -7,15 +7,43 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from multiarm.types import FloatArray
+from workcell.arms.base import shape_frames
 from workcell.compile import CompiledCell
 from workcell.geometry import CollisionWorld
-from workcell.geometry._zone_sweep_jit import capsules_touch
-from workcell.geometry.zone_sweep import _segment_distances, _segments, _shape_capsules
+from workcell.geometry._zone_sweep_jit import capsules_touch, segment_points
+from workcell.geometry.zone_sweep import _segment_distances, _shape_capsules
 from workcell.sim.protocol.ports import ArmPort
 
 __all__ = ["GeometryGuard"]
+
+
+@njit(cache=True)
+def _swept_box(p0: FloatArray, p1: FloatArray, grow: float) -> FloatArray:
+    """(6,) ``lo, hi`` corners of the box around every end point of
+    ``p0, p1`` (N, S, 3), grown by ``grow`` (the minima and maxima of
+    ``np.minimum(p0.min((0, 1)), p1.min((0, 1)))`` and its max twin, exactly)."""
+    out = np.empty(6)
+    for r in range(3):
+        out[r] = np.inf
+        out[3 + r] = -np.inf
+    n, m = p0.shape[0], p0.shape[1]
+    for i in range(n):
+        for j in range(m):
+            for r in range(3):
+                a, b = p0[i, j, r], p1[i, j, r]
+                lo = a if a < b else b
+                hi = a if a > b else b
+                if lo < out[r]:
+                    out[r] = lo
+                if hi > out[3 + r]:
+                    out[3 + r] = hi
+    for r in range(3):
+        out[r] -= grow
+        out[3 + r] += grow
+    return out
 
 
 class GeometryGuard:
@@ -63,7 +91,17 @@ class GeometryGuard:
         self.dt = float(dt)
         self.padding = float(padding)
         self.capsules = [_shape_capsules(arm.shapes) for arm in cell.arms]
-        self._boxes: dict[int, tuple[FloatArray, Any]] = {}
+        # per arm: each shape's frame and its capsule's homogeneous end points
+        # in that frame (constant: computed once, as _segments would each time)
+        self._frames_of: list[tuple[Any, FloatArray]] = []
+        for arm, (local, _r) in zip(cell.arms, self.capsules, strict=True):
+            idx, off = shape_frames(arm)
+            hw = np.einsum(
+                "sij,skj->ski", off, np.concatenate([local, np.ones((len(local), 2, 1))], 2)
+            )
+            self._frames_of.append((idx, np.ascontiguousarray(hw)))
+        self._reach = [float(r.max()) if len(r) else 0.0 for _l, r in self.capsules]
+        self._boxes: dict[int, tuple[FloatArray, Any, tuple[float, ...]]] = {}
         self.world = CollisionWorld()
         for arm, q in zip(cell.arms, cell.start, strict=True):
             self.world.add_arm(arm, q=q, padding=self.padding / 2)
@@ -95,11 +133,25 @@ class GeometryGuard:
                 np.maximum(p0.max(axis=(0, 1)), p1.max(axis=(0, 1))) + r,
             ]
         )
-        self._boxes[key] = (box, leg if leg is not None else ctl.q)
+        self._boxes[key] = (box, leg if leg is not None else ctl.q, tuple(box.ravel().tolist()))
         return box
 
+    def _box_floats(self, ctl: ArmPort) -> tuple[float, ...]:
+        """:meth:`_box` as six floats ``(x0, y0, z0, x1, y1, z1)``."""
+        leg = ctl.leg
+        got = self._boxes.get(id(leg) if leg is not None else -1 - ctl.index)
+        if got is not None and (leg is not None or got[1] is ctl.q):
+            return got[2]
+        self._box(ctl)
+        return self._boxes[id(leg) if leg is not None else -1 - ctl.index][2]
+
     def _ends(self, a: int, q: FloatArray) -> tuple[FloatArray, FloatArray]:
-        return _segments(self.cell.arms[a], q, self.capsules[a][0])
+        """World end points (N, S, 3) of arm ``a``'s capsule segments at joints ``q``
+        (:func:`workcell.geometry.zone_sweep._segments` with the constant part kept)."""
+        idx, hw = self._frames_of[a]
+        fr = np.ascontiguousarray(self.cell.arms[a].frames(np.atleast_2d(q)), dtype=float)
+        pts = segment_points(fr, idx, hw)
+        return pts[0], pts[1]
 
     def blockers(self, mover: ArmPort, arms: list[ArmPort]) -> list[int]:
         """Arms in the way of ``mover``'s motion to its next station."""
@@ -115,12 +167,12 @@ class GeometryGuard:
         if dur <= 0:
             return []
         self.checks += 1
-        (mx0, my0, mz0), (mx1, my1, mz1) = self._box(mover).tolist()
+        mx0, my0, mz0, mx1, my1, mz1 = self._box_floats(mover)
         near = []
         for o in arms:
             if o is mover:
                 continue
-            (ox0, oy0, oz0), (ox1, oy1, oz1) = self._box(o).tolist()
+            ox0, oy0, oz0, ox1, oy1, oz1 = self._box_floats(o)
             if (
                 ox0 <= mx1
                 and oy0 <= my1
@@ -136,24 +188,22 @@ class GeometryGuard:
         # until the mover and every moving arm near it reach their next stations
         horizon = max([dur] + [o.next_stop_time() - now for o in near if o.running])
         n = max(2, math.ceil(horizon / self.dt) + 1)
-        off = np.linspace(0.0, horizon, n)
+        off = np.arange(n, dtype=float) * (horizon / (n - 1))  # np.linspace(0, horizon, n)
+        off[-1] = horizon
         times = now + off
         qa = leg.trajectory.sample(np.minimum(tau0 + off, tau1))
         a0, a1 = self._ends(mover.index, qa)
         ra = self.capsules[mover.index][1]
         out = []
-        reach = float(ra.max()) + self.padding
-        lo = np.minimum(a0.min(axis=(0, 1)), a1.min(axis=(0, 1))) - reach
-        hi = np.maximum(a0.max(axis=(0, 1)), a1.max(axis=(0, 1))) + reach
+        reach = self._reach[mover.index] + self.padding
+        lx0, ly0, lz0, hx1, hy1, hz1 = _swept_box(a0, a1, reach).tolist()
         for other in near:
             # a standing arm is sampled once
             qb = other.predict(times if other.running else times[:1])
             b0, b1 = self._ends(other.index, qb)
             rb = self.capsules[other.index][1]
-            rmax = float(rb.max())
-            blo = np.minimum(b0.min(axis=(0, 1)), b1.min(axis=(0, 1))) - rmax
-            bhi = np.maximum(b0.max(axis=(0, 1)), b1.max(axis=(0, 1))) + rmax
-            if np.any(blo > hi) or np.any(bhi < lo):
+            bx0, by0, bz0, bx1, by1, bz1 = _swept_box(b0, b1, self._reach[other.index]).tolist()
+            if bx0 > hx1 or by0 > hy1 or bz0 > hz1 or bx1 < lx0 or by1 < ly0 or bz1 < lz0:
                 continue  # swept boxes apart
             if other.running:
                 d = _segment_distances(

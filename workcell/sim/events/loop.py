@@ -47,6 +47,7 @@ Examples
 
 from __future__ import annotations
 
+import gc
 import heapq
 import math
 import time
@@ -405,6 +406,14 @@ class EventLoop:
         wall0 = self._clock() if realtime is not None else 0.0
         virt0 = self._now
         n = 0
+        # The cyclic garbage collector is paused while callbacks run: a run
+        # allocates many small, acyclic records (frames, trace rows, motion
+        # records), and every full collection would walk all of them again;
+        # the reference counts free them as before, and the collector is
+        # restored (and catches up) when the run returns or raises.
+        collecting = gc.isenabled()
+        if collecting:
+            gc.disable()
         try:
             while heap:
                 t, _, _, h = heap[0]
@@ -426,6 +435,8 @@ class EventLoop:
                     h[3]()
         finally:
             self.events_run += n
+            if collecting:
+                gc.enable()
         if until is not None:
             if realtime is not None:
                 wait = wall0 + (until - virt0) / realtime - self._clock()
