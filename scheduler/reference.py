@@ -62,7 +62,13 @@ import numpy as np
 
 from multiarm.errors import ScheduleError, UsageError
 from scheduler.bounds import lower_bound
-from scheduler.cpsat import _rounders, _time_values, essential_resources, integer_scale
+from scheduler.cpsat import (
+    _rounders,
+    _time_values,
+    cpsat_bound,
+    essential_resources,
+    integer_scale,
+)
 from scheduler.overlap import overlap_bound
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule, validate
@@ -524,14 +530,11 @@ def _bound_of(
     dtime: float | None,
 ) -> tuple[float, str]:
     """The inward model's bound (seconds) and CP-SAT's status name."""
-    from ortools.sat.python import cp_model
 
     mdl, v = nowait_model(problem, horizon, unit=unit, zones=zones, rounding="in")
     solver = _solver(seconds, seed, workers, dtime, False)
     code = solver.solve(mdl)
-    if code in (cp_model.OPTIMAL, cp_model.FEASIBLE):
-        return float(solver.best_objective_bound) / v["scale"], solver.status_name(code)
-    return 0.0, solver.status_name(code)
+    return cpsat_bound(solver, code) / v["scale"], solver.status_name(code)
 
 
 def relaxation_bound(
@@ -708,7 +711,7 @@ def solve_reference(
     bounding = bound_time is None or bound_time > 0
     bdt = max_deterministic_time if bound_deterministic_time is None else bound_deterministic_time
     if v["exact"]:
-        nw_bound = float(solver.best_objective_bound) / scale if ok else 0.0
+        nw_bound = cpsat_bound(solver, code) / scale
     elif bounding:
         nw_bound, _ = _bound_of(p, horizon, 1 / scale, True, bound_time, seed, workers, bdt)
     else:
