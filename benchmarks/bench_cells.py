@@ -28,8 +28,8 @@ measuring its whole comparison in one run) and ``benchmarks/sweeps/cells.toml``
    ``benchmarks/sweeps/cells_reference.toml``): tree at 10 s, CP-SAT's general
    model at 60 s, the no-wait reference of :mod:`scheduler.reference` at 60 s,
    the best lower bound, which bound it is, whether anything is proven,
-   and the gaps to it; the tree plan's busiest arm and its waits
-   (:func:`plan_loads`) say where a plan's time goes.
+   and the gaps to it; the tree plan's busiest arm, its waits and its
+   busiest resource (:func:`plan_loads`) say where a plan's time goes.
 
 The schedule sweep resumes where a previous run stopped (``--fresh`` runs it
 again); the speed measurements are always taken again.
@@ -169,14 +169,21 @@ def validity_checks(seed: int, states: int) -> dict[str, Any]:
     }
 
 
-def plan_loads(problem: Any, schedule: Any) -> tuple[float, float]:
-    """The busiest arm's work in a plan and the plan's waits (seconds).
+def plan_loads(problem: Any, schedule: Any) -> dict[str, Any]:
+    """Where a plan's time goes: its busiest arm, its waits, its busiest resource.
 
-    Work: the arm's availability plus, in start order, the travel into each
-    of its tasks and the task's duration (no waits, no idle time); waits:
-    the sum of all waits at zone borders. A plan whose makespan is far above
-    its busiest arm's work spends the rest idle or waiting for zones.
+    * busiest arm: the arm's availability plus, in start order, the travel
+      into each of its tasks and the task's duration (no waits, no idle
+      time);
+    * waits: the sum of all waits at zone borders;
+    * busiest resource: the exclusive zone, shared-zone movement or tool
+      occupied longest (the union of its uses, waits inside them included).
+
+    A plan whose makespan is far above its busiest arm's work and its
+    busiest resource's occupancy spends the rest idle or waiting.
     """
+    from scheduler.timing import merge_intervals
+
     p = problem
     arms = np.asarray(p.mode_arm)[schedule.mode]
     busiest = 0.0
@@ -187,7 +194,17 @@ def plan_loads(problem: Any, schedule: Any) -> tuple[float, float]:
             work += p.setup_time(a, prev, int(t)) + float(p.mode_duration[schedule.mode[t]])
             prev = int(t)
         busiest = max(busiest, work)
-    return busiest, float(sum(float(np.sum(w)) for w in schedule.waits))
+    uses: dict[tuple[str, str], list[tuple[float, float]]] = {}
+    for kind, res, _task, _arm, s, e in schedule.reservation_rows(p):
+        uses.setdefault((kind, res), []).append((s, e))
+    occupied = {k: sum(e - s for s, e in merge_intervals(v)) for k, v in uses.items()}
+    top = max(occupied, key=lambda k: occupied[k], default=None)
+    return {
+        "busiest arm": busiest,
+        "waits": float(sum(float(np.sum(w)) for w in schedule.waits)),
+        "busiest resource": "-" if top is None else f"{top[0]} {top[1]}",
+        "occupied": 0.0 if top is None else occupied[top],
+    }
 
 
 def references(
@@ -262,7 +279,7 @@ def references(
         def gap(x: float, best: float = best) -> str:
             return f"{x / best - 1:.1%}" if math.isfinite(x) and best > 0 else "-"
 
-        busiest, waits = plan_loads(p, tree.schedule)
+        loads = plan_loads(p, tree.schedule)
         rows.append(
             {
                 "cell": name,
@@ -270,8 +287,10 @@ def references(
                 "zones": p.n_zones,
                 "windows": p.n_windows,
                 "tree (s)": round(tree.objective, 2),
-                "tree busiest arm (s)": round(busiest, 2),
-                "tree waits (s)": round(waits, 2),
+                "tree busiest arm (s)": round(loads["busiest arm"], 2),
+                "tree waits (s)": round(loads["waits"], 2),
+                "tree busiest resource": loads["busiest resource"],
+                "occupied (s)": round(loads["occupied"], 2),
                 "cpsat status": cp.status.value,
                 "cpsat (s)": round(cp.objective, 2) if math.isfinite(cp.objective) else "none",
                 "cpsat bound (s)": round(cp.bound, 2),
@@ -372,7 +391,8 @@ def main(argv: list[str] | None = None) -> None:
         " reference is proven (proof time: its solve), else 'no'. tree busiest arm:"
         " the most loaded arm's availability, travel and durations in the tree's plan"
         " (waits and idle time left out); tree waits: the plan's waits at zone"
-        " borders.\n"
+        " borders; tree busiest resource: the zone, movement or tool the plan occupies"
+        " longest, and for how long (occupied, waits inside its uses included).\n"
     )
     both = pd.concat([speed, sched, refs], ignore_index=True)
     path = publish(
