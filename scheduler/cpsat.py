@@ -533,8 +533,9 @@ def solve_cpsat(
     stats.extra["scale"] = scale
     stats.extra["deterministic_time"] = float(solver.deterministic_time)
     # CP-SAT's bound holds even when the run stopped without a solution, as
-    # long as some valid schedule fits under the horizon (the optimum is then
-    # a solution of the model)
+    # long as some valid schedule fits under the horizon, or the model has a
+    # solution (the optimum is then one of the model's solutions)
+    anchored = anchored or code in (cp_model.OPTIMAL, cp_model.FEASIBLE)
     bound = max(lb, cpsat_bound(solver, code) / scale if exact and anchored else lb)
     if code == cp_model.INFEASIBLE:
         return Result(
