@@ -58,6 +58,7 @@ from scheduler.start import begin
 __all__ = [
     "add_arm_sequences",
     "build_model",
+    "cpsat_bound",
     "essential_resources",
     "integer_scale",
     "resource_windows",
@@ -488,6 +489,7 @@ def solve_cpsat(
     )
     if isinstance(hint, Schedule):
         horizon = max(horizon, hint.makespan) if first is not None else hint.makespan
+    anchored = first is not None or isinstance(hint, Schedule)
     pad = oracle_padding(p)
     if pad is not None:  # every task padded with its largest detour: a serial bound
         horizon = float(
@@ -530,12 +532,11 @@ def solve_cpsat(
     stats.extra["conflicts"] = int(solver.num_conflicts)
     stats.extra["scale"] = scale
     stats.extra["deterministic_time"] = float(solver.deterministic_time)
-    bound = max(
-        lb,
-        solver.best_objective_bound / scale
-        if exact and code in (cp_model.OPTIMAL, cp_model.FEASIBLE)
-        else lb,
-    )
+    # CP-SAT's bound holds even when the run stopped without a solution, as
+    # long as some valid schedule fits under the horizon, or the model has a
+    # solution (the optimum is then one of the model's solutions)
+    anchored = anchored or code in (cp_model.OPTIMAL, cp_model.FEASIBLE)
+    bound = max(lb, cpsat_bound(solver, code) / scale if exact and anchored else lb)
     if code == cp_model.INFEASIBLE:
         return Result(
             SolveStatus.INFEASIBLE if exact else SolveStatus.UNKNOWN,
@@ -548,7 +549,7 @@ def solve_cpsat(
             stats,
         )
     if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
-        return Result(SolveStatus.UNKNOWN, None, math.inf, lb, runtime, "cpsat", seed, stats)
+        return Result(SolveStatus.UNKNOWN, None, math.inf, bound, runtime, "cpsat", seed, stats)
     T = p.n_tasks
     sched: Schedule | None = None
     cand = _schedule_of(p, solver, v, pad)
@@ -576,6 +577,48 @@ def solve_cpsat(
     if optimal:
         bound = mk
     return Result(status, sched, mk, min(bound, mk), runtime, "cpsat", seed, stats)
+
+
+def cpsat_bound(solver: Any, code: Any) -> int:
+    """CP-SAT's proven lower bound of a minimised integer objective, in model units.
+
+    Valid whether or not a solution was found: a run stopped by its limit
+    (``UNKNOWN``: no solution yet, or ``FEASIBLE``) still proved that no
+    solution is below ``best_objective_bound``. Rounded down (an integer
+    objective is at least the ceiling, the floor is the safe side of any
+    floating-point noise); 0 when the model is infeasible, invalid, or the
+    bound is not finite.
+
+    Parameters
+    ----------
+    solver : ortools.sat.python.cp_model.CpSolver
+        After ``solve``.
+    code : CpSolverStatus
+        The status ``solve`` returned.
+
+    Returns
+    -------
+    int
+        At most the optimum of the model (``>= 0``).
+
+    Examples
+    --------
+    >>> from ortools.sat.python import cp_model
+    >>> m = cp_model.CpModel()
+    >>> x = m.new_int_var(3, 10, "x")
+    >>> m.minimize(x)
+    >>> s = cp_model.CpSolver()
+    >>> cpsat_bound(s, s.solve(m))
+    3
+    """
+    from ortools.sat.python import cp_model
+
+    if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE, cp_model.UNKNOWN):
+        return 0
+    b = float(solver.best_objective_bound)
+    if not math.isfinite(b) or b <= 0:
+        return 0
+    return math.floor(b + 1e-9)
 
 
 def add_arm_sequences(

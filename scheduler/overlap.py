@@ -63,7 +63,12 @@ from typing import Any
 import numpy as np
 
 from multiarm.types import FloatArray
-from scheduler.cpsat import add_arm_sequences, essential_resources, resource_windows
+from scheduler.cpsat import (
+    add_arm_sequences,
+    cpsat_bound,
+    essential_resources,
+    resource_windows,
+)
 from scheduler.kernel._jit import njit
 from scheduler.problem import Problem
 
@@ -413,9 +418,10 @@ def overlap_bound(
     Returns
     -------
     (float, str)
-        The bound (seconds; 0 when CP-SAT found no bound) and CP-SAT's status
-        name (``"OPTIMAL"``: the relaxation is solved, its optimum is the
-        bound; ``"SKIPPED"``: too many pairs).
+        The bound (seconds; CP-SAT's proven bound even when the run stopped
+        before its first solution, ``"UNKNOWN"``; 0 when it proved nothing)
+        and CP-SAT's status name (``"OPTIMAL"``: the relaxation is solved,
+        its optimum is the bound; ``"SKIPPED"``: too many pairs).
     """
     from ortools.sat.python import cp_model
 
@@ -443,6 +449,5 @@ def overlap_bound(
     solver.parameters.num_workers = workers
     solver.parameters.random_seed = seed
     code = solver.solve(mdl)
-    if code in (cp_model.OPTIMAL, cp_model.FEASIBLE):
-        return float(solver.best_objective_bound) / v["scale"], solver.status_name(code)
-    return 0.0, solver.status_name(code)
+    # a run stopped before its first solution still proved its bound
+    return cpsat_bound(solver, code) / v["scale"], solver.status_name(code)

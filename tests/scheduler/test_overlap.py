@@ -166,3 +166,33 @@ def test_every_schedule_keeps_the_pair_spans() -> None:
                 assert span >= abs(delta) + both - lead[row] - 1e-9
                 checked += 1
     assert checked > 10
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_stopped_relaxation_keeps_its_bound(seed: int) -> None:
+    """A relaxation stopped by its work limit before any solution (UNKNOWN)
+    still reports CP-SAT's proven bound (it was dropped as 0 before), and the
+    bound stays below a valid schedule."""
+    p = random_problem(3, 30, 3, 1, seed=seed)
+    b, status = overlap_bound(p, None, workers=1, max_deterministic_time=0.5)
+    assert status == "UNKNOWN"
+    assert b > 0
+    greedy = solve(p, "greedy", time_limit=None, seed=seed)
+    assert b <= validate(p, greedy.schedule) + 1e-9
+
+
+def test_cpsat_bound_of_each_status() -> None:
+    from ortools.sat.python import cp_model
+
+    from scheduler.cpsat import cpsat_bound
+
+    m = cp_model.CpModel()
+    x = m.new_int_var(0, 50, "x")
+    y = m.new_int_var(0, 50, "y")
+    m.add(x + y >= 17)
+    m.minimize(x + y)
+    solver = cp_model.CpSolver()
+    solver.parameters.num_workers = 1
+    assert cpsat_bound(solver, solver.solve(m)) == 17
+    m.add(x + y <= 3)  # now infeasible: no bound to keep
+    assert cpsat_bound(solver, solver.solve(m)) == 0

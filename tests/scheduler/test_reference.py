@@ -122,3 +122,21 @@ def test_supersigma_under_a_work_limit_is_repeatable() -> None:
     assert validate(p, a.schedule) == pytest.approx(a.makespan)
     assert lower_bound(p) == a.bound <= a.makespan
     assert math.isfinite(a.makespan)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_small_problems_without_zones_are_proven_to_10_ms(seed: int) -> None:
+    """Without zones the zone-free relaxation is the problem itself. With no
+    exact unit, up to FINE_TASKS tasks its bound is taken at the no-wait
+    model's 1 ms, so it meets the reference's (valid) schedule within the
+    10 ms a proof allows (at 10 ms, five rounded durations on a chain
+    already lose more)."""
+    from scheduler.reference import FINE_TASKS
+
+    p = _stretched(random_problem(2, 6, 0, 0, seed=seed, setups=False), 1 / 3)
+    assert p.n_tasks <= FINE_TASKS
+    r = solve_reference(p, None, seed, workers=1, bound_deterministic_time=5.0)
+    assert not r.exact_unit and r.schedule is not None
+    assert validate(p, r.schedule) == pytest.approx(r.makespan)
+    assert r.bound <= r.makespan + 1e-9
+    assert r.makespan - r.zone_free_bound <= 0.01

@@ -90,7 +90,7 @@ def test_every_published_sweep_file_loads() -> None:
             continue
         counts[path.stem] = len(load_sweep(path).runs())
     assert counts["generated"] == 25 * 4 and counts["small"] == 20 * 2
-    assert counts["cells"] == 9 and counts["quick"] == 18
+    assert counts["cells"] == 4 * 3 and counts["quick"] == 18
     if FJSP.is_dir():
         assert counts["fjsp"] == 30 * 3
         bk = {i.name: i.best_known for i in load_sweep(SWEEPS / "fjsp.toml").instances}
