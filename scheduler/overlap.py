@@ -63,7 +63,12 @@ from typing import Any
 import numpy as np
 
 from multiarm.types import FloatArray
-from scheduler.cpsat import add_arm_sequences, essential_resources, resource_windows
+from scheduler.cpsat import (
+    add_arm_sequences,
+    essential_resources,
+    resource_windows,
+    solve_or_interrupt,
+)
 from scheduler.kernel._jit import njit
 from scheduler.problem import Problem
 
@@ -442,7 +447,7 @@ def overlap_bound(
         solver.parameters.max_deterministic_time = max_deterministic_time
     solver.parameters.num_workers = workers
     solver.parameters.random_seed = seed
-    code = solver.solve(mdl)
+    code = solve_or_interrupt(solver, mdl)  # Ctrl-C stays Python's
     if code in (cp_model.OPTIMAL, cp_model.FEASIBLE):
         return float(solver.best_objective_bound) / v["scale"], solver.status_name(code)
     return 0.0, solver.status_name(code)

@@ -62,7 +62,13 @@ import numpy as np
 
 from multiarm.errors import ScheduleError, UsageError
 from scheduler.bounds import lower_bound
-from scheduler.cpsat import _rounders, _time_values, essential_resources, integer_scale
+from scheduler.cpsat import (
+    _rounders,
+    _time_values,
+    essential_resources,
+    integer_scale,
+    solve_or_interrupt,
+)
 from scheduler.overlap import overlap_bound
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule, validate
@@ -528,7 +534,7 @@ def _bound_of(
 
     mdl, v = nowait_model(problem, horizon, unit=unit, zones=zones, rounding="in")
     solver = _solver(seconds, seed, workers, dtime, False)
-    code = solver.solve(mdl)
+    code = solve_or_interrupt(solver, mdl)  # Ctrl-C stays Python's
     if code in (cp_model.OPTIMAL, cp_model.FEASIBLE):
         return float(solver.best_objective_bound) / v["scale"], solver.status_name(code)
     return 0.0, solver.status_name(code)
@@ -700,7 +706,7 @@ def solve_reference(
     )
     if v["pairs"] > LARGE:  # presolve alone would take the whole budget
         solver.parameters.cp_model_presolve = False
-    code = solver.solve(mdl)
+    code = solve_or_interrupt(solver, mdl)  # Ctrl-C stays Python's
     seconds = time.perf_counter() - t0
     dtime = float(solver.deterministic_time)
     ok = code in (cp_model.OPTIMAL, cp_model.FEASIBLE)
