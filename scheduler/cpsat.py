@@ -448,7 +448,7 @@ def oracle_padding(problem: Problem, max_queries: int = 200_000) -> Any:
     return pad
 
 
-def run_solver(solver: Any, model: Any, callback: Any = None) -> tuple[int, bool]:
+def run_solver(solver: Any, model: Any, callback: Any = None) -> tuple[Any, bool]:
     """``solver.solve(model)`` that leaves Ctrl-C to Python: ``(status, interrupted)``.
 
     CP-SAT catches SIGINT itself by default (``catch_sigint_signal``) and
@@ -470,15 +470,15 @@ def run_solver(solver: Any, model: Any, callback: Any = None) -> tuple[int, bool
 
     Returns
     -------
-    (int, bool)
-        CP-SAT's status code, and whether Ctrl-C stopped the search.
+    (CpSolverStatus, bool)
+        CP-SAT's status, and whether Ctrl-C stopped the search.
     """
     import threading
 
     solver.parameters.catch_sigint_signal = False
 
-    def solve() -> int:
-        return int(solver.solve(model, callback) if callback is not None else solver.solve(model))
+    def solve() -> Any:
+        return solver.solve(model, callback) if callback is not None else solver.solve(model)
 
     if threading.current_thread() is not threading.main_thread():
         return solve(), False
@@ -514,12 +514,12 @@ def run_solver(solver: Any, model: Any, callback: Any = None) -> tuple[int, bool
             interrupted = True
     if "error" in box:
         raise box["error"]
-    return int(box["code"]), interrupted
+    return box["code"], interrupted
 
 
-def solve_or_interrupt(solver: Any, model: Any) -> int:
+def solve_or_interrupt(solver: Any, model: Any) -> Any:
     """:func:`run_solver` for a search with nothing to keep: KeyboardInterrupt
-    after Ctrl-C (the search stopped), else CP-SAT's status code."""
+    after Ctrl-C (the search stopped), else CP-SAT's status."""
     code, interrupted = run_solver(solver, model)
     if interrupted:
         raise KeyboardInterrupt
