@@ -62,8 +62,10 @@ __all__ = [
     "essential_resources",
     "integer_scale",
     "resource_windows",
+    "run_solver",
     "shared_resources",
     "solve_cpsat",
+    "solve_or_interrupt",
 ]
 
 
@@ -447,6 +449,84 @@ def oracle_padding(problem: Problem, max_queries: int = 200_000) -> Any:
     return pad
 
 
+def run_solver(solver: Any, model: Any, callback: Any = None) -> tuple[Any, bool]:
+    """``solver.solve(model)`` that leaves Ctrl-C to Python: ``(status, interrupted)``.
+
+    CP-SAT catches SIGINT itself by default (``catch_sigint_signal``) and
+    ends its search as if the time limit had come: the KeyboardInterrupt
+    never reaches Python, and a sweep or a tree search racing CP-SAT goes
+    on after Ctrl-C. Here CP-SAT leaves the signal to Python's handler. On
+    the main thread the search runs in a helper thread while this one waits
+    (signals are handled on the main thread only): at Ctrl-C it stops the
+    search (``stop_search``), waits for it to end and returns
+    ``interrupted=True`` with the status CP-SAT reached. On another thread
+    (the tree search's racing CP-SAT) the main thread gets the
+    KeyboardInterrupt and stops this search itself; ``interrupted`` is False.
+
+    Parameters
+    ----------
+    solver : ortools.sat.python.cp_model.CpSolver
+    model : ortools.sat.python.cp_model.CpModel
+    callback : CpSolverSolutionCallback, optional
+
+    Returns
+    -------
+    (CpSolverStatus, bool)
+        CP-SAT's status, and whether Ctrl-C stopped the search.
+    """
+    import threading
+
+    solver.parameters.catch_sigint_signal = False
+
+    def solve() -> Any:
+        return solver.solve(model, callback) if callback is not None else solver.solve(model)
+
+    if threading.current_thread() is not threading.main_thread():
+        return solve(), False
+    box: dict[str, Any] = {}
+    done = threading.Event()
+
+    def run() -> None:
+        try:
+            box["code"] = solve()
+        except BaseException as exc:  # handed to the caller below
+            box["error"] = exc
+        finally:
+            done.set()
+
+    worker = threading.Thread(target=run, name="cpsat-solve", daemon=True)
+    interrupted = False
+    try:
+        worker.start()
+    except KeyboardInterrupt:
+        if worker.ident is None:  # it never started: nothing to stop
+            raise
+        interrupted = True
+    # wait on an Event, not on Thread.join(timeout): a KeyboardInterrupt inside
+    # join can mark a thread still running as stopped (Python 3.11, bpo-45274),
+    # and the result would be read before the search ended. After Ctrl-C, ask
+    # again until it ends (a stop asked before the search began is not kept).
+    while not done.is_set():
+        try:
+            if interrupted:
+                solver.stop_search()
+            done.wait(0.05)
+        except KeyboardInterrupt:
+            interrupted = True
+    if "error" in box:
+        raise box["error"]
+    return box["code"], interrupted
+
+
+def solve_or_interrupt(solver: Any, model: Any) -> Any:
+    """:func:`run_solver` for a search with nothing to keep: KeyboardInterrupt
+    after Ctrl-C (the search stopped), else CP-SAT's status."""
+    code, interrupted = run_solver(solver, model)
+    if interrupted:
+        raise KeyboardInterrupt
+    return code
+
+
 def solve_cpsat(
     problem: Problem,
     time_limit: float | None,
@@ -526,8 +606,10 @@ def solve_cpsat(
         on_solver(solver)
     # the per-solution callback takes the GIL: a run racing Python code in
     # another thread goes without it (measured 0.55 s vs 0.87 s to optimal)
-    code = solver.solve(mdl, _Progress()) if callback else solver.solve(mdl)
+    code, interrupted = run_solver(solver, mdl, _Progress() if callback else None)
     runtime = time.perf_counter() - t0
+    if interrupted:
+        stats.interrupted = True  # Ctrl-C: the best schedule found so far, if any
     stats.nodes = int(solver.num_branches)
     stats.extra["conflicts"] = int(solver.num_conflicts)
     stats.extra["scale"] = scale

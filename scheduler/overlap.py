@@ -68,6 +68,7 @@ from scheduler.cpsat import (
     cpsat_bound,
     essential_resources,
     resource_windows,
+    solve_or_interrupt,
 )
 from scheduler.kernel._jit import njit
 from scheduler.problem import Problem
@@ -448,6 +449,6 @@ def overlap_bound(
         solver.parameters.max_deterministic_time = max_deterministic_time
     solver.parameters.num_workers = workers
     solver.parameters.random_seed = seed
-    code = solver.solve(mdl)
+    code = solve_or_interrupt(solver, mdl)  # Ctrl-C stays Python's
     # a run stopped before its first solution still proved its bound
     return cpsat_bound(solver, code) / v["scale"], solver.status_name(code)

@@ -68,6 +68,7 @@ from scheduler.cpsat import (
     cpsat_bound,
     essential_resources,
     integer_scale,
+    solve_or_interrupt,
 )
 from scheduler.overlap import overlap_bound
 from scheduler.problem import Problem
@@ -540,7 +541,7 @@ def _bound_of(
 
     mdl, v = nowait_model(problem, horizon, unit=unit, zones=zones, rounding="in")
     solver = _solver(seconds, seed, workers, dtime, False)
-    code = solver.solve(mdl)
+    code = solve_or_interrupt(solver, mdl)  # Ctrl-C stays Python's
     return cpsat_bound(solver, code) / v["scale"], solver.status_name(code)
 
 
@@ -711,7 +712,7 @@ def solve_reference(
     )
     if v["pairs"] > LARGE:  # presolve alone would take the whole budget
         solver.parameters.cp_model_presolve = False
-    code = solver.solve(mdl)
+    code = solve_or_interrupt(solver, mdl)  # Ctrl-C stays Python's
     seconds = time.perf_counter() - t0
     dtime = float(solver.deterministic_time)
     ok = code in (cp_model.OPTIMAL, cp_model.FEASIBLE)

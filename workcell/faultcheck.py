@@ -17,7 +17,9 @@ error naming the file and the field path,
   ``problem=``): a fault time after any possible end of the run, see
   :func:`plan_end_bound`.
 
-The name checks need only the :class:`~workcell.Cell` and cost nothing, so
+The name checks (:func:`workcell.sim.harness.faults.check_fault_names`,
+which :func:`workcell.sim.simulate` runs too, with the same messages) need
+only the :class:`~workcell.Cell` and cost nothing, so
 the pipeline calls :func:`check_faults` **before compiling**; the time check
 needs the modes' durations, so it runs **after compiling and before
 solving** (the compile takes seconds, the solve and the simulation the
@@ -41,7 +43,6 @@ multiarm.errors.ValidationError: f.toml: faults[0].kinds[0]: unknown message kin
 
 from __future__ import annotations
 
-import difflib
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -50,26 +51,12 @@ import numpy as np
 
 from multiarm.errors import ValidationError
 from scheduler.problem import Problem
-from workcell.arms.profiles import StepperDrive
 from workcell.cell import Cell
 from workcell.compile import CompiledCell
-from workcell.sim import (
-    MESSAGE_BYTES,
-    ActivateZones,
-    ArmFailure,
-    Crash,
-    EmergencyStop,
-    FaultPlan,
-    LatePart,
-    LostSync,
-    MessageLoss,
-)
+from workcell.sim import Crash, EmergencyStop, FaultPlan, LatePart, MessageLoss
+from workcell.sim.harness.faults import MESSAGE_KINDS, check_fault_names
 
 __all__ = ["MESSAGE_KINDS", "PLAN_END_MARGIN", "check_faults", "plan_end_bound"]
-
-MESSAGE_KINDS: tuple[str, ...] = tuple(sorted(MESSAGE_BYTES))
-"""The message kinds the coordination protocol sends (S2.7): the names a
-``message_loss`` record's ``kinds`` may list."""
 
 PLAN_END_MARGIN = 2.0
 """Factor on the serial bound of :func:`plan_end_bound` (room for blocking
@@ -154,13 +141,6 @@ def _plan(faults: object, top: str) -> FaultPlan:
         raise ValidationError(f"{top}: {exc}") from None
 
 
-def _unknown(where: str, what: str, value: str, known: Sequence[str]) -> ValidationError:
-    close = difflib.get_close_matches(value, known, n=1)
-    hint = f" (did you mean {close[0]!r}?)" if close else ""
-    shown = ", ".join(known) if known else "none"
-    return ValidationError(f"{where}: unknown {what} {value!r}{hint}; known: {shown}")
-
-
 def check_faults(
     cell: Cell | CompiledCell,
     faults: FaultPlan | Sequence[Any] | None,
@@ -196,50 +176,7 @@ def check_faults(
         cell = cell.cell
     if not isinstance(cell, Cell):
         raise ValidationError(f"check_faults: expected a Cell or CompiledCell, got {cell!r}")
-    arms = tuple(a.name for a in cell.arms)
-    parts = sorted(set(cell.taskset.expected_arrivals()) | {x.id for x in cell.taskset.parts})
-    zones = cell.zone_map.zone_names()
-    failed: dict[str, int] = {}
-    lossy: int | None = None
-    for i, f in enumerate(plan):
-        at = f"{top}: faults[{i}]"
-        if isinstance(f, ArmFailure | Crash | LostSync) and f.arm not in arms:
-            raise _unknown(f"{at}.arm", "arm", f.arm, arms)
-        if isinstance(f, ArmFailure):
-            if f.arm in failed:
-                j = failed[f.arm]
-                raise ValidationError(
-                    f"{at}.arm: arm {f.arm!r} already fails for good at "
-                    f"{plan[j].at:g} s (faults[{j}]); an arm fails once"  # type: ignore[union-attr]
-                )
-            failed[f.arm] = i
-        if isinstance(f, LostSync):
-            arm = cell.arm(f.arm)
-            if f.axis >= arm.dof:
-                raise ValidationError(
-                    f"{at}.axis: arm {f.arm!r} has axes 0 .. {arm.dof - 1}, not {f.axis}"
-                )
-            if not isinstance(arm.drives[f.axis], StepperDrive):
-                raise ValidationError(
-                    f"{at}.axis: axis {f.axis} of arm {f.arm!r} is a servo joint; only "
-                    "stepper axes lose synchronism (S1.6)"
-                )
-        if isinstance(f, LatePart) and f.part not in parts:
-            raise _unknown(f"{at}.part", "part", f.part, parts)
-        if isinstance(f, ActivateZones):
-            for k, z in enumerate(f.zones):
-                if z not in zones:
-                    raise _unknown(f"{at}.zones[{k}]", "zone", z, zones)
-        if isinstance(f, MessageLoss):
-            if lossy is not None:
-                raise ValidationError(
-                    f"{at}: a second message_loss record (the first is faults[{lossy}]); "
-                    "give one record with every kind it applies to"
-                )
-            lossy = i
-            for k, kind in enumerate(f.kinds or ()):
-                if kind not in MESSAGE_KINDS:
-                    raise _unknown(f"{at}.kinds[{k}]", "message kind", kind, MESSAGE_KINDS)
+    check_fault_names(plan, cell, source=source)
     if problem is None:
         return
     end = plan_end_bound(problem, plan)

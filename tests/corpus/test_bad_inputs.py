@@ -238,19 +238,17 @@ CASES: list[Case] = [
         "faults-estop-1e300",
         '[[faults]]\nkind = "emergency_stop"\nat = 1e300\nduration = 1.0\n',
         "f.toml",
-        "faults[0] (emergency_stop): EmergencyStop.at must be in [0, 1e+06] seconds",
+        "f.toml: faults[0].at: must be in [0, 1e+06] seconds",
     ),
     _faults(
         "faults-estop-duration-1e300",
         '[[faults]]\nkind = "emergency_stop"\nat = 1.0\nduration = 1e300\n',
-        "f.toml",
-        "EmergencyStop.duration",
+        "f.toml: faults[0].duration: must be in [0, 1e+06] seconds",
     ),
     _faults(
         "faults-loss-0.999999",
         '[[faults]]\nkind = "message_loss"\nprobability = 0.999999\n',
-        "f.toml",
-        "MessageLoss.probability must be in [0, 0.999]",
+        "f.toml: faults[0].probability: must be in [0, 0.999]",
     ),
     _faults(
         "faults-unknown-kind",

@@ -205,7 +205,17 @@ def fuzz_target(
 _ORDER = {name: i for i, name in enumerate([*TARGETS, ALL])}
 
 
-def _markdown(results: list[FuzzRun], args: argparse.Namespace) -> str:
+def _notes(md: Path) -> str:
+    """The text after the table of an existing ``PREFIX.md`` (how each row was
+    run, findings): kept by ``--merge``, which rewrites only the table."""
+    if not md.is_file():
+        return ""
+    lines = md.read_text(encoding="utf-8").splitlines()
+    rows = [i for i, line in enumerate(lines) if line.startswith("|")]
+    return "\n".join(lines[rows[-1] + 1 :]).strip("\n") if rows else ""
+
+
+def _markdown(results: list[FuzzRun], args: argparse.Namespace, notes: str = "") -> str:
     lines = [
         "# Fuzzing the parsers",
         "",
@@ -216,7 +226,7 @@ def _markdown(results: list[FuzzRun], args: argparse.Namespace) -> str:
         "",
         f"Command: `python -m tests.fuzz.campaign --runs {args.runs} --max-time {args.max_time} "
         f"--timeout {args.timeout} --seed {args.seed}`"
-        + (f" `--targets {args.targets}`" if args.targets else "")
+        + (f" `--targets {args.targets}`" if args.targets and not args.merge else "")
         + ". Machine: 2 cores shared with other work; exec/s are noisy.",
         "",
         "| target | status | inputs | exec/s | coverage (cov) | features (ft) | corpus | seeds | wall (s) |",
@@ -228,6 +238,8 @@ def _markdown(results: list[FuzzRun], args: argparse.Namespace) -> str:
             f"| {r.target} | {r.status} | {inputs} | {r.exec_per_s:.0f} | {r.coverage} "
             f"| {r.features} | {r.corpus} | {r.seeds} | {r.seconds} |"
         )
+    if notes:
+        lines += ["", notes]
     return "\n".join(lines) + "\n"
 
 
@@ -245,7 +257,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--merge",
         action="store_true",
-        help="keep the rows of PREFIX.json of the targets not run now (one table, many runs)",
+        help="keep the rows of PREFIX.json of the targets not run now (one table, many "
+        "runs) and the text under the table of PREFIX.md",
     )
     args = ap.parse_args(argv)
     names = [n for n in args.targets.split(",") if n] or list(TARGETS)
@@ -253,6 +266,7 @@ def main(argv: list[str] | None = None) -> int:
     if unknown:
         ap.error(f"unknown target {unknown[0]!r} (known: {', '.join(TARGETS)})")
     kept: list[FuzzRun] = []
+    notes = _notes(args.out.with_suffix(".md")) if args.merge and args.out is not None else ""
     if args.merge and args.out is not None and args.out.with_suffix(".json").is_file():
         old = json.loads(args.out.with_suffix(".json").read_text(encoding="utf-8"))
         kept = [FuzzRun(**(r | {"log": ""})) for r in old if r["target"] not in names]
@@ -281,7 +295,7 @@ def main(argv: list[str] | None = None) -> int:
                 json.dumps([asdict(x) | {"log": None} for x in table], indent=1) + "\n",
                 encoding="utf-8",
             )
-            args.out.with_suffix(".md").write_text(_markdown(table, args), encoding="utf-8")
+            args.out.with_suffix(".md").write_text(_markdown(table, args, notes), encoding="utf-8")
     return 0 if all(r.status == "ok" for r in results) else 1
 
 

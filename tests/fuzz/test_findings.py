@@ -83,19 +83,19 @@ CASES = [
         "faults_json/message-loss-kinds-number.json",
         _faults,
         UsageError,
-        "MessageLoss.kinds must be a list of message kinds",
+        "faults[3].kinds: must be a list of message kinds, got 0.005",
     ),
     (
         "faults_toml/message-loss-kinds-number.toml",
         _faults,
         UsageError,
-        "faults[0] (message_loss): MessageLoss.kinds must be a list of message kinds, got 5.0",
+        "faults[0].kinds: must be a list of message kinds, got 5.0",
     ),
     (
         "faults_toml/activate-zones-number.toml",
         _faults,
         UsageError,
-        "faults[0] (activate_zones): ActivateZones.zones must be a list of zone names, got 3",
+        "faults[0].zones: must be a list of zone names, got 3",
     ),
 ]
 

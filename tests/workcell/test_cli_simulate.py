@@ -155,7 +155,7 @@ def test_bad_arguments_are_one_line_errors_before_any_work(
     assert f"--faults: {bad}:2:" in err and "TOML syntax error" in err  # file:line:col
     bad.write_text('[[faults]]\nkind = "crash"\narm = "left"\n')
     err = _bad(["simulate", "supersigma", "--faults", str(bad)], capsys)
-    assert f"--faults: {bad}: faults[0] (crash): missing field 'at'" in err
+    assert f"--faults: {bad}: faults[0]: missing field 'at'" in err
     bad_json = tmp_path / "bad.json"
     bad_json.write_text('[{"kind": "meteor"}]')
     err = _bad(["simulate", "supersigma", "--faults", str(bad_json)], capsys)

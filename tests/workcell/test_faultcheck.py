@@ -3,20 +3,33 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import json
 import math
+from pathlib import Path
 from typing import Any
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from multiarm.errors import ValidationError
+from multiarm.errors import InputError, ValidationError
 from scheduler import solve
 from scheduler.generate import random_problem
 from workcell import Cell, load_example
 from workcell.faultcheck import MESSAGE_KINDS, PLAN_END_MARGIN, check_faults, plan_end_bound
-from workcell.sim import MESSAGE_BYTES, EmergencyStop, FaultPlan, MessageLoss
+from workcell.sim import (
+    MESSAGE_BYTES,
+    ActivateZones,
+    ArmFailure,
+    Crash,
+    EmergencyStop,
+    FaultPlan,
+    LatePart,
+    LostSync,
+    MessageLoss,
+)
 
 
 @functools.cache
@@ -122,7 +135,7 @@ def test_the_message_kinds_are_the_protocols() -> None:
 
 def test_a_malformed_record_names_the_file() -> None:
     text = _refused("supersigma", [{"kind": "crash", "arm": "left"}])
-    assert text == "faults.toml: faults[0] (crash): missing field 'at'"
+    assert text == "faults.toml: faults[0]: missing field 'at' (a crash record needs arm, at)"
     with pytest.raises(ValidationError, match=r"^faults: expected a FaultPlan"):
         check_faults(_cell("supersigma"), "arm_failure")  # type: ignore[arg-type]
 
@@ -130,13 +143,13 @@ def test_a_malformed_record_names_the_file() -> None:
 @pytest.mark.parametrize(
     ("record", "words"),
     [
-        ({"kind": "emergency_stop", "at": 1e300, "duration": 1.0}, "EmergencyStop.at must be in"),
-        ({"kind": "emergency_stop", "at": 1.0, "duration": 1e300}, "EmergencyStop.duration"),
-        ({"kind": "crash", "arm": "left", "at": 1.0, "force": 1e300}, "Crash.force must be in"),
-        ({"kind": "message_loss", "probability": 0.999999}, "probability must be in [0, 0.999]"),
+        ({"kind": "emergency_stop", "at": 1e300, "duration": 1.0}, "at: must be in [0, 1e+06]"),
+        ({"kind": "emergency_stop", "at": 1.0, "duration": 1e300}, "duration: must be in"),
+        ({"kind": "crash", "arm": "left", "at": 1.0, "force": 1e300}, "force: must be in"),
+        ({"kind": "message_loss", "probability": 0.999999}, "probability: must be in [0, 0.999]"),
         ({"kind": "message_loss", "probability": 0.9991}, "a dead link is an arm_failure"),
-        ({"kind": "message_loss", "probability": 0.1, "timeout": 1e-300}, "MessageLoss.timeout"),
-        ({"kind": "late_part", "part": "pin", "delay": 1e300}, "LatePart.delay must be in"),
+        ({"kind": "message_loss", "probability": 0.1, "timeout": 1e-300}, "timeout: must be in"),
+        ({"kind": "late_part", "part": "pin", "delay": 1e300}, "delay: must be in"),
         ({"kind": "lost_sync", "arm": "left", "axis": 0, "at": 1.0, "steps": 10**12}, "steps"),
     ],
 )
@@ -144,8 +157,107 @@ def test_numbers_outside_their_physical_range_are_refused(
     record: dict[str, Any], words: str
 ) -> None:
     text = _refused("supersigma", [record])
-    assert text.startswith("faults.toml: faults[0] (")
+    assert text.startswith("faults.toml: faults[0].")
     assert words in text
+
+
+# ---------------------------------------------- a record's own field checks
+
+_RECORDS = {
+    cls.kind: cls
+    for cls in (ArmFailure, Crash, LostSync, MessageLoss, LatePart, EmergencyStop, ActivateZones)
+}
+_VALID = {r["kind"]: r for r in ALL_KINDS}
+
+
+def _bad_values(cls: type[Any], name: str) -> list[object]:
+    """Values field ``name`` of record ``cls`` refuses: of the wrong type, and out of range."""
+    hint = str(next(f.type for f in dataclasses.fields(cls) if f.name == name))
+    if name in ("arm", "part"):
+        return [3, "", ["left"], True]
+    if name in ("kinds", "zones"):
+        return [5, "fixture", [1], [""], {"a": 1}]
+    if hint == "int":  # axis, steps
+        return [1.5, "1", True, -1, *([0, 10**7] if name == "steps" else [])]
+    # seconds, newtons, a probability
+    out: list[object] = ["soon", True, None, -1.0, math.nan, 1e300, [1.0]]
+    if name == "probability":
+        out.append(0.9999)
+    if name in ("timeout", "delay"):
+        out.append(0.0 if name == "delay" else 1e-9)
+    return out
+
+
+_FIELD_CASES = [
+    pytest.param(kind, f.name, value, id=f"{kind}.{f.name}={value!r}")
+    for kind, cls in _RECORDS.items()
+    for f in dataclasses.fields(cls)
+    for value in _bad_values(cls, f.name)
+]
+
+
+def test_every_field_of_every_kind_is_covered() -> None:
+    covered = {(k, n) for k, n, _ in (c.values for c in _FIELD_CASES)}
+    every = {(k, f.name) for k, cls in _RECORDS.items() for f in dataclasses.fields(cls)}
+    assert covered == every
+    assert set(_VALID) == set(_RECORDS)
+
+
+@pytest.mark.parametrize(("kind", "name", "value"), _FIELD_CASES)
+def test_a_records_own_check_names_the_file_then_the_field_path(
+    kind: str, name: str, value: object, tmp_path: Path
+) -> None:
+    """``faults.toml: faults[1].at: must be ...``: the file, then the field's
+    path, for every field of every kind, read from a file (TOML and JSON),
+    from dicts, and through check_faults; a record built directly names
+    ``Record.field``."""
+    from workcell.pipeline import load_faults
+
+    record = dict(_VALID[kind], **{name: value})
+    records = [{"kind": "emergency_stop", "at": 0.5, "duration": 0.1}, record]
+    path = f"faults[1].{name}: "
+    with pytest.raises(ValidationError) as info:
+        FaultPlan.from_dicts(records)
+    assert str(info.value).startswith(path), str(info.value)
+    assert f"({kind})" not in str(info.value) and _RECORDS[kind].__name__ not in str(info.value)
+    text = _refused("supersigma", records)
+    assert text.startswith(f"faults.toml: {path}"), text
+    json_file = tmp_path / "faults.json"
+    try:
+        json_file.write_text(json.dumps(records, allow_nan=True))
+    except TypeError:
+        return  # not a JSON value
+    with pytest.raises(InputError) as info:
+        load_faults(json_file)
+    assert str(info.value).startswith(f"{json_file}: {path}"), str(info.value)
+    args = {k: v for k, v in record.items() if k != "kind"}
+    with pytest.raises(ValidationError) as info:
+        _RECORDS[kind](**args)
+    assert str(info.value).startswith(f"{_RECORDS[kind].__name__}.{name}: "), str(info.value)
+
+
+@pytest.mark.parametrize("kind", sorted(_RECORDS))
+def test_missing_and_unknown_fields_name_the_record(kind: str, tmp_path: Path) -> None:
+    toml = tmp_path / "faults.toml"
+    record = dict(_VALID[kind], colour=3)
+    lines = [f"{k} = {json.dumps(v)}" for k, v in record.items()]
+    toml.write_text("[[faults]]\n" + "\n".join(lines) + "\n")
+    from workcell.pipeline import load_faults
+
+    with pytest.raises(InputError) as info:
+        load_faults(toml)
+    assert str(info.value).startswith(f"{toml}: faults[0]: unknown field 'colour' of a {kind}")
+    cls = _RECORDS[kind]
+    required = [
+        f.name
+        for f in dataclasses.fields(cls)
+        if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+    ]
+    for name in required:
+        rec = {k: v for k, v in _VALID[kind].items() if k != name}
+        assert _refused("supersigma", [rec]).startswith(
+            f"faults.toml: faults[0]: missing field {name!r} (a {kind} record needs "
+        )
 
 
 def test_a_part_that_never_comes_is_still_allowed() -> None:

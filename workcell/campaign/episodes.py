@@ -640,7 +640,8 @@ class EpisodeResult:
     episode : Episode
     findings : tuple of Finding
     executed_makespan : float
-        Seconds (NaN when no task was done or the run raised).
+        Seconds (NaN when no task was done or the run raised; ``None`` in
+        :meth:`row`, so no table holds NaN).
     done, failed : int
         Tasks done and failed (-1 when the run raised).
     wall_time : float
@@ -677,7 +678,9 @@ class EpisodeResult:
             "outcome": self.outcome,
             "finding_kinds": ",".join(sorted({f.kind for f in self.findings})),
             "findings": json.dumps([[f.kind, f.task, f.detail] for f in self.findings]),
-            "executed_makespan": self.executed_makespan,
+            "executed_makespan": (
+                self.executed_makespan if math.isfinite(self.executed_makespan) else None
+            ),
             "done": self.done,
             "failed": self.failed,
             "wall_time": self.wall_time,

@@ -394,13 +394,11 @@ def test_bad_arguments_give_our_errors(supersigma: Any, plans: Any) -> None:
         simulate(42, plan)  # type: ignore[arg-type]
     with pytest.raises(UsageError, match="nope"):
         simulate(supersigma, plan, medium="nope")
-    with pytest.raises(ValidationError, match=r"faults\[0\] \(crash\)\.arm: unknown arm 'middle'"):
+    with pytest.raises(ValidationError, match=r"^faults: faults\[0\]\.arm: unknown arm 'middle'"):
         simulate(supersigma, plan, faults=[Crash("middle", 1.0)])
-    with pytest.raises(
-        ValidationError, match=r"faults\[0\] \(late_part\)\.part: unknown part 'gear'"
-    ):
+    with pytest.raises(ValidationError, match=r"^faults: faults\[0\]\.part: unknown part 'gear'"):
         simulate(supersigma, plan, faults=[{"kind": "late_part", "part": "gear", "delay": 3}])
-    with pytest.raises(ValidationError, match=r"faults\[1\] \(crash\): missing field 'at'"):
+    with pytest.raises(ValidationError, match=r"faults\[1\]: missing field 'at'"):
         simulate(
             supersigma,
             plan,

@@ -225,7 +225,8 @@ class Metrics:
     Attributes
     ----------
     planned_makespan, executed_makespan : float
-        Seconds (executed: the last task end, or NaN when no task ran).
+        Seconds (executed: the last end of a task done; missing, NaN, when no
+        task was done: ``null`` in :meth:`to_dict`, see :attr:`done_tasks`).
     utilisation : dict of str to float
         Per arm, busy time / executed makespan, in [0, 1]: the time within
         ``[0, executed_makespan]`` the arm spent on a leg (travelling to a
@@ -285,7 +286,9 @@ class Metrics:
 
     def summary(self) -> dict[str, float | int]:
         """Scalar figures (dict name -> value): makespans, counts, latency and
-        delay percentiles (p50/p99/max, NaN when there are none)."""
+        delay percentiles (p50/p99/max). A figure that does not exist (the
+        executed makespan when no task was done, a percentile of no sample)
+        is missing: NaN here, ``null`` in :meth:`to_dict` and the JSON."""
 
         def pct(a: FloatArray, q: float) -> float:
             return float(np.percentile(a, q)) if len(a) else math.nan
@@ -342,10 +345,13 @@ class Metrics:
         return pd.DataFrame(rows, columns=["metric", "key", "value"])
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain data (JSON-ready)."""
+        """Plain data (JSON-ready; a missing figure, NaN in :meth:`summary`, is ``None``)."""
         return {
             "format": "multiarm.metrics/1",
-            "summary": {k: _jsonable(float(v)) for k, v in self.summary().items()},
+            "summary": {
+                k: None if math.isnan(float(v)) else _jsonable(float(v))
+                for k, v in self.summary().items()
+            },
             "utilisation": dict(self.utilisation),
             "zone_wait": dict(self.zone_wait),
             "resolve_latency": self.resolve_latency.tolist(),

@@ -1,10 +1,12 @@
 """Faults and disturbances injected into a simulated run, described as data.
 
 Every record is a frozen dataclass checked on construction
-(:class:`~multiarm.errors.ValidationError` naming the field). A
-:class:`FaultPlan` is a tuple of records, built directly, from plain dicts
-(:meth:`FaultPlan.from_dicts`, errors name the record index and field), or
-drawn at random with a seed (:meth:`FaultPlan.sample`).
+(:class:`~multiarm.errors.ValidationError` naming the field:
+``EmergencyStop.at: must be ...``). A :class:`FaultPlan` is a tuple of
+records, built directly, from plain dicts (:meth:`FaultPlan.from_dicts`,
+errors name the field path: ``faults[0].at: must be ...``; read from a file,
+the file first: ``faults.toml: faults[0].at: must be ...``), or drawn at
+random with a seed (:meth:`FaultPlan.sample`).
 
 * :class:`ArmFailure` -- the arm stops for good at ``at``; its interrupted
   task and every task planned on it are reassigned by a re-solve.
@@ -35,22 +37,32 @@ Examples
 >>> FaultPlan.from_dicts([{"kind": "crash", "arm": "left"}])
 Traceback (most recent call last):
 ...
-multiarm.errors.ValidationError: faults[0] (crash): missing field 'at'
+multiarm.errors.ValidationError: faults[0]: missing field 'at' (a crash record needs arm, at)
+>>> FaultPlan.from_dicts([{"kind": "emergency_stop", "at": -1.0, "duration": 1.0}])
+Traceback (most recent call last):
+...
+multiarm.errors.ValidationError: faults[0].at: must be in [0, 1e+06] seconds, got -1.0
 """
 
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 from multiarm.errors import ValidationError
+from workcell.sim.comms.medium import MESSAGE_BYTES
+
+if TYPE_CHECKING:
+    from workcell.cell import Cell
 
 __all__ = [
+    "MESSAGE_KINDS",
     "ActivateZones",
     "ArmFailure",
     "Crash",
@@ -60,6 +72,7 @@ __all__ = [
     "LatePart",
     "LostSync",
     "MessageLoss",
+    "check_fault_names",
 ]
 
 
@@ -75,24 +88,48 @@ frame is sent ``1 / (1 - p)`` times on average, and the run's events grow
 with it (the supersigma cell's greedy plan: 0.4 s lossless, 2.1 s at 0.9,
 14.5 s at 0.99; at 0.999 a run takes minutes, at 0.99999 hours). A link that
 loses more is down: model it as an :class:`ArmFailure`."""
+MESSAGE_KINDS: tuple[str, ...] = tuple(sorted(MESSAGE_BYTES))
+"""The message kinds the coordination protocol sends (S2.7): the names a
+:class:`MessageLoss` record's ``kinds`` may list."""
 
 
-def _time(value: object, what: str, *, allow_inf: bool = False) -> float:
+def _bad(record: object, field: str, text: str) -> ValidationError:
+    """The error of field ``field`` of ``record``: ``"Record.field: text"``.
+
+    :meth:`FaultPlan.from_dicts` turns the ``Record.`` prefix into the
+    record's path (``faults[i].field: text``); :func:`_field_path` is the
+    one place that reads it back.
+    """
+    return ValidationError(f"{type(record).__name__}.{field}: {text}")
+
+
+def _field_path(exc: ValidationError, cls: type[Any], where: str) -> str:
+    """The message of a record's own check with its path: ``where.field: text``."""
+    text = str(exc)
+    prefix = f"{cls.__name__}."
+    return f"{where}.{text[len(prefix) :]}" if text.startswith(prefix) else f"{where}: {text}"
+
+
+def _time(record: object, field: str, *, allow_inf: bool = False) -> float:
+    value = getattr(record, field)
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValidationError(f"{what} must be a number, got {value!r}")
+        raise _bad(record, field, f"must be a number of seconds, got {value!r}")
     v = float(value)
     if math.isnan(v) or (not 0 <= v <= MAX_SECONDS and not (allow_inf and v == math.inf)):
-        raise ValidationError(
-            f"{what} must be in [0, {MAX_SECONDS:g}] seconds{' or inf' if allow_inf else ''}, "
-            f"got {value!r}"
+        raise _bad(
+            record,
+            field,
+            f"must be in [0, {MAX_SECONDS:g}] seconds{' or inf' if allow_inf else ''}, "
+            f"got {value!r}",
         )
+    object.__setattr__(record, field, v)
     return v
 
 
-def _name(value: object, what: str) -> str:
+def _name(record: object, field: str) -> None:
+    value = getattr(record, field)
     if not isinstance(value, str) or not value:
-        raise ValidationError(f"{what} must be a non-empty string, got {value!r}")
-    return value
+        raise _bad(record, field, f"must be a non-empty string, got {value!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -104,8 +141,8 @@ class ArmFailure:
     at: float
 
     def __post_init__(self) -> None:
-        _name(self.arm, "ArmFailure.arm")
-        object.__setattr__(self, "at", _time(self.at, "ArmFailure.at"))
+        _name(self, "arm")
+        _time(self, "at")
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,12 +161,12 @@ class Crash:
     force: float = 50.0
 
     def __post_init__(self) -> None:
-        _name(self.arm, "Crash.arm")
-        object.__setattr__(self, "at", _time(self.at, "Crash.at"))
-        object.__setattr__(self, "recovery", _time(self.recovery, "Crash.recovery"))
+        _name(self, "arm")
+        _time(self, "at")
+        _time(self, "recovery")
         f = self.force
         if isinstance(f, bool) or not isinstance(f, int | float) or not 0 <= f <= MAX_FORCE:
-            raise ValidationError(f"Crash.force must be in [0, {MAX_FORCE:g}] newtons, got {f!r}")
+            raise _bad(self, "force", f"must be in [0, {MAX_FORCE:g}] newtons, got {f!r}")
         object.__setattr__(self, "force", float(f))
 
 
@@ -144,13 +181,13 @@ class LostSync:
     steps: int = 40
 
     def __post_init__(self) -> None:
-        _name(self.arm, "LostSync.arm")
+        _name(self, "arm")
         if isinstance(self.axis, bool) or not isinstance(self.axis, int) or self.axis < 0:
-            raise ValidationError(f"LostSync.axis must be an integer >= 0, got {self.axis!r}")
-        object.__setattr__(self, "at", _time(self.at, "LostSync.at"))
+            raise _bad(self, "axis", f"must be an integer >= 0, got {self.axis!r}")
+        _time(self, "at")
         s = self.steps
         if isinstance(s, bool) or not isinstance(s, int) or not 1 <= s <= 10**6:
-            raise ValidationError(f"LostSync.steps must be an integer in [1, 1e6], got {s!r}")
+            raise _bad(self, "steps", f"must be an integer in [1, 1e6], got {s!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -166,9 +203,11 @@ class MessageLoss:
     def __post_init__(self) -> None:
         p = self.probability
         if isinstance(p, bool) or not isinstance(p, int | float) or not 0.0 <= p <= MAX_LOSS:
-            raise ValidationError(
-                f"MessageLoss.probability must be in [0, {MAX_LOSS:g}] (each frame is sent "
-                f"1 / (1 - p) times on average; a dead link is an arm_failure), got {p!r}"
+            raise _bad(
+                self,
+                "probability",
+                f"must be in [0, {MAX_LOSS:g}] (each frame is sent 1 / (1 - p) times on "
+                f"average; a dead link is an arm_failure), got {p!r}",
             )
         object.__setattr__(self, "probability", float(p))
         if self.kinds is not None:
@@ -176,17 +215,13 @@ class MessageLoss:
             if not isinstance(kinds, tuple | list) or not all(
                 isinstance(k, str) and k for k in kinds
             ):
-                raise ValidationError(
-                    f"MessageLoss.kinds must be a list of message kinds, got {self.kinds!r}"
-                )
+                raise _bad(self, "kinds", f"must be a list of message kinds, got {self.kinds!r}")
             object.__setattr__(self, "kinds", tuple(self.kinds))
-        t = _time(self.timeout, "MessageLoss.timeout")
-        if t < 1e-6:
-            raise ValidationError(
-                f"MessageLoss.timeout must be in [1e-06, {MAX_SECONDS:g}] seconds, "
-                f"got {self.timeout!r}"
+        timeout = self.timeout
+        if _time(self, "timeout") < 1e-6:
+            raise _bad(
+                self, "timeout", f"must be in [1e-06, {MAX_SECONDS:g}] seconds, got {timeout!r}"
             )
-        object.__setattr__(self, "timeout", t)
 
 
 @dataclass(frozen=True, slots=True)
@@ -198,11 +233,10 @@ class LatePart:
     delay: float
 
     def __post_init__(self) -> None:
-        _name(self.part, "LatePart.part")
-        d = _time(self.delay, "LatePart.delay", allow_inf=True)
-        if d <= 0:
-            raise ValidationError(f"LatePart.delay must be > 0 seconds, got {self.delay!r}")
-        object.__setattr__(self, "delay", d)
+        _name(self, "part")
+        delay = self.delay
+        if _time(self, "delay", allow_inf=True) <= 0:
+            raise _bad(self, "delay", f"must be > 0 seconds, got {delay!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -214,8 +248,8 @@ class EmergencyStop:
     duration: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "at", _time(self.at, "EmergencyStop.at"))
-        object.__setattr__(self, "duration", _time(self.duration, "EmergencyStop.duration"))
+        _time(self, "at")
+        _time(self, "duration")
 
 
 @dataclass(frozen=True, slots=True)
@@ -227,12 +261,10 @@ class ActivateZones:
     zones: tuple[str, ...]
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "at", _time(self.at, "ActivateZones.at"))
+        _time(self, "at")
         zones: object = self.zones
         if not isinstance(zones, tuple | list) or not all(isinstance(z, str) and z for z in zones):
-            raise ValidationError(
-                f"ActivateZones.zones must be a list of zone names, got {self.zones!r}"
-            )
+            raise _bad(self, "zones", f"must be a list of zone names, got {self.zones!r}")
         object.__setattr__(self, "zones", tuple(self.zones))
 
 
@@ -311,10 +343,11 @@ class FaultPlan(Sequence[Fault]):
                 )
             cls_ = _KINDS[kind]
             names = [f.name for f in dataclasses.fields(cls_)]
-            unknown = sorted(set(rec) - set(names) - {"kind"})
+            unknown = sorted(set(rec) - set(names) - {"kind"}, key=str)
             if unknown:
                 raise ValidationError(
-                    f"faults[{i}] ({kind}): unknown field {unknown[0]!r} (known: {', '.join(names)})"
+                    f"faults[{i}]: unknown field {unknown[0]!r} of a {kind} record "
+                    f"(known: kind, {', '.join(names)})"
                 )
             required = [
                 f.name
@@ -323,7 +356,10 @@ class FaultPlan(Sequence[Fault]):
             ]
             for r in required:
                 if r not in rec:
-                    raise ValidationError(f"faults[{i}] ({kind}): missing field {r!r}")
+                    raise ValidationError(
+                        f"faults[{i}]: missing field {r!r} (a {kind} record needs "
+                        f"{', '.join(required)})"
+                    )
             args = {k: v for k, v in rec.items() if k != "kind"}
             if isinstance(args.get("kinds"), list):
                 args["kinds"] = tuple(args["kinds"])
@@ -332,7 +368,7 @@ class FaultPlan(Sequence[Fault]):
             try:
                 out.append(cls_(**args))
             except ValidationError as exc:
-                raise ValidationError(f"faults[{i}] ({kind}): {exc}") from None
+                raise ValidationError(_field_path(exc, cls_, f"faults[{i}]")) from None
         return cls(out)
 
     def to_dicts(self) -> list[dict[str, Any]]:
@@ -421,3 +457,84 @@ def as_plan(faults: FaultPlan | Sequence[Fault] | Sequence[Mapping[str, Any]] | 
     if items and all(isinstance(x, Mapping) for x in items):
         return FaultPlan.from_dicts(items)  # type: ignore[arg-type]
     return FaultPlan(items)  # type: ignore[arg-type]
+
+
+def _unknown(where: str, what: str, value: str, known: Sequence[str]) -> ValidationError:
+    close = difflib.get_close_matches(value, known, n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    shown = ", ".join(known) if known else "none"
+    return ValidationError(f"{where}: unknown {what} {value!r}{hint}; known: {shown}")
+
+
+def check_fault_names(plan: FaultPlan, cell: Cell, *, source: str | None = None) -> None:
+    """Refuse records of ``plan`` whose names do not fit ``cell``.
+
+    The one implementation of these checks: :func:`workcell.faultcheck.check_faults`
+    calls it before compiling, :func:`~workcell.sim.simulate` before running
+    (the same messages). Refused: an arm, part or zone the cell does not
+    have; a lost-sync axis the arm does not have or that is not a stepper
+    axis; a message kind the protocol does not send (:data:`MESSAGE_KINDS`);
+    two failures of one arm; more than one :class:`MessageLoss` record.
+
+    Parameters
+    ----------
+    plan : FaultPlan
+    cell : workcell.Cell
+    source : str, optional
+        The fault file's name, the first word of every message (``"faults"``
+        when not given).
+
+    Raises
+    ------
+    ValidationError
+        ``"SOURCE: faults[i].field: what is wrong"``.
+    """
+    from workcell.arms.profiles import StepperDrive
+
+    top = source if source is not None else "faults"
+    arms = tuple(a.name for a in cell.arms)
+    parts = sorted(set(cell.taskset.expected_arrivals()) | {x.id for x in cell.taskset.parts})
+    zones = cell.zone_map.zone_names()  # the arm-pair zones are never activated
+    failed: dict[str, int] = {}
+    lossy: int | None = None
+    for i, f in enumerate(plan):
+        at = f"{top}: faults[{i}]"
+        if isinstance(f, ArmFailure | Crash | LostSync) and f.arm not in arms:
+            raise _unknown(f"{at}.arm", "arm", f.arm, arms)
+        if isinstance(f, ArmFailure):
+            if f.arm in failed:
+                j = failed[f.arm]
+                first = plan[j]
+                assert isinstance(first, ArmFailure)
+                raise ValidationError(
+                    f"{at}.arm: arm {f.arm!r} already fails for good at {first.at:g} s "
+                    f"(faults[{j}]); an arm fails once"
+                )
+            failed[f.arm] = i
+        if isinstance(f, LostSync):
+            arm = cell.arm(f.arm)
+            if f.axis >= arm.dof:
+                raise ValidationError(
+                    f"{at}.axis: arm {f.arm!r} has axes 0 .. {arm.dof - 1}, not {f.axis}"
+                )
+            if not isinstance(arm.drives[f.axis], StepperDrive):
+                raise ValidationError(
+                    f"{at}.axis: axis {f.axis} of arm {f.arm!r} is a servo joint; only "
+                    "stepper axes lose synchronism (S1.6)"
+                )
+        if isinstance(f, LatePart) and f.part not in parts:
+            raise _unknown(f"{at}.part", "part", f.part, parts)
+        if isinstance(f, ActivateZones):
+            for k, z in enumerate(f.zones):
+                if z not in zones:
+                    raise _unknown(f"{at}.zones[{k}]", "zone", z, zones)
+        if isinstance(f, MessageLoss):
+            if lossy is not None:
+                raise ValidationError(
+                    f"{at}: a second message_loss record (the first is faults[{lossy}]); "
+                    "give one record with every kind it applies to"
+                )
+            lossy = i
+            for k, kind in enumerate(f.kinds or ()):
+                if kind not in MESSAGE_KINDS:
+                    raise _unknown(f"{at}.kinds[{k}]", "message kind", kind, MESSAGE_KINDS)

@@ -121,8 +121,9 @@ class SimResult:
         (0: the schedule given, ``k``: the plan of the ``k``-th re-solve; the
         last one that planned the task to run). A failed task that had
         started (interrupted by its arm's failure, or an insertion that
-        failed) keeps its start; start and end are NaN for a task that never
-        started."""
+        failed) keeps its start. A task that never started has no start and
+        no end: they are missing (NaN, pandas' missing value, in the frame;
+        an empty cell in ``tasks.csv``; see :meth:`save`)."""
         import pandas as pd
 
         cols = [
@@ -150,19 +151,27 @@ class SimResult:
         )
 
     def save(self, directory: str | PathLike[str]) -> Path:
-        """Write trace.json, metrics.json and tasks.csv into ``directory`` (created)."""
+        """Write trace.json, metrics.json and tasks.csv into ``directory`` (created).
+
+        No file holds NaN: a value that does not exist (the start and end of
+        a task that never started, the executed makespan when no task was
+        done, a latency percentile without re-solves) is an empty cell in
+        ``tasks.csv`` and ``null`` in ``metrics.json``.
+        """
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
         self.trace.to_json(d / "trace.json")
         self.metrics.to_json(d / "metrics.json")
-        self.tasks_frame().to_csv(d / "tasks.csv", index=False)
+        self.tasks_frame().to_csv(d / "tasks.csv", index=False, na_rep="")
         return d
 
     def __repr__(self) -> str:
         m = self.metrics
+        ran = m.done_tasks > 0 and math.isfinite(m.executed_makespan)
+        executed = f"{m.executed_makespan:.6g} s" if ran else "nothing (no task done)"
         return (
             f"SimResult({self.problem.name!r}: planned {m.planned_makespan:.6g} s, executed "
-            f"{m.executed_makespan:.6g} s, {m.done_tasks} done, {m.failed_tasks} failed)"
+            f"{executed}, {m.done_tasks} done, {m.failed_tasks} failed)"
         )
 
 

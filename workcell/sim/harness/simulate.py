@@ -29,9 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from multiarm.errors import InternalError, UsageError, ValidationError
+from multiarm.errors import InternalError, UsageError
 from scheduler import Problem, Schedule, validate
-from workcell.arms.profiles import StepperDrive
 from workcell.cell import Cell
 from workcell.compile import CompiledCell, compile_cell
 from workcell.sim.comms.link import Link
@@ -53,6 +52,7 @@ from workcell.sim.harness.faults import (
     LostSync,
     MessageLoss,
     as_plan,
+    check_fault_names,
 )
 from workcell.sim.harness.monitor_live import LiveMonitor
 from workcell.sim.harness.options import CONTROL_TIME, COORDINATION_POLICIES, SimOptions
@@ -129,41 +129,6 @@ def _compiled(cell: Cell | CompiledCell | Problem) -> CompiledCell:
             "workcell.compile_cell returned (it carries the trajectories)"
         )
     raise UsageError(f"simulate: cell must be a Cell or a CompiledCell, got {type(cell).__name__}")
-
-
-def _check_faults(plan: FaultPlan, cc: CompiledCell) -> None:
-    p = cc.problem
-    arms = p.arm_names
-    parts = set(cc.cell.taskset.expected_arrivals()) | {x.id for x in cc.cell.taskset.parts}
-    sdl = set(cc.cell.zone_map.zone_names())  # the arm-pair zones are never activated
-    for i, f in enumerate(plan):
-        where = f"faults[{i}] ({f.kind})"
-        if isinstance(f, ArmFailure | Crash | LostSync) and f.arm not in arms:
-            raise ValidationError(f"{where}.arm: unknown arm {f.arm!r} (arms: {', '.join(arms)})")
-        if isinstance(f, LostSync):
-            arm = cc.cell.arm(f.arm)
-            if f.axis >= arm.dof:
-                raise ValidationError(
-                    f"{where}.axis: arm {f.arm!r} has {arm.dof} axes, no axis {f.axis}"
-                )
-            if not isinstance(arm.drives[f.axis], StepperDrive):
-                raise ValidationError(
-                    f"{where}.axis: axis {f.axis} of arm {f.arm!r} is a servo joint; only "
-                    "stepper axes lose synchronism (S1.6)"
-                )
-        if isinstance(f, LatePart) and f.part not in parts:
-            raise ValidationError(
-                f"{where}.part: unknown part {f.part!r} (parts: {', '.join(sorted(parts))})"
-            )
-        if isinstance(f, ActivateZones):
-            for z in f.zones:
-                if z not in sdl:
-                    raise ValidationError(
-                        f"{where}.zones: unknown zone {z!r} (zones of the cell's zone map: "
-                        f"{', '.join(sorted(sdl))})"
-                    )
-    if sum(isinstance(f, MessageLoss) for f in plan) > 1:
-        raise ValidationError("faults: at most one message_loss record")
 
 
 def simulate(
@@ -256,7 +221,7 @@ def simulate(
     if options.zone_protocol:
         validate(p, schedule)
     fplan = as_plan(faults)
-    _check_faults(fplan, cc)
+    check_fault_names(fplan, cc.cell)  # the checks of workcell.faultcheck.check_faults
     factory: Any = POLICIES[coordination]
     seed = int(seed)
     thresholds = free_thresholds(options.force_threshold, p.arm_names)
