@@ -385,3 +385,13 @@ def test_a_part_late_at_its_expected_arrival_holds_back_its_task() -> None:
     # notice (housing1, arriving at 114.8 s) held it back; over Ethernet the
     # withdrawal came after the start. Both notices now move the releases first.
     assert replay("scara4", 0, 69).findings == ()
+
+
+def test_an_ompl_path_missing_the_edge_check_is_no_detour_not_an_error() -> None:
+    # multiarm campaign parking --replay 23:27 (was a finding): two activations
+    # of the same zones at one instant under message loss; the coordinator's
+    # detour for 'sa' came back from OMPL with a shortcut that misses the
+    # sampled edge check by less than a sample, and planning raised
+    # InternalError. The raw path is tried next, else there is no detour.
+    result = replay("parking", 23, 27)
+    assert result.findings == ()

@@ -129,3 +129,24 @@ def test_first_contact_is_never_late() -> None:
     assert not ok.all() and t_hit <= true_first < t_hit + 0.05
     away = ProfileTrajectory(np.array([START, [-2.5, 0.3]]), np.array([0.0, 1.0]))
     assert first_contact(ARM, away, PARKED) is None
+
+
+def test_a_coarse_resolution_never_raises_and_every_path_passes_the_edge_check() -> None:
+    # A seeded campaign over planner seeds and coarse resolutions, where
+    # OMPL's shortcuts (pieces of checked edges taken as free) are most
+    # likely to miss the sampled edge check: every answer is a path that
+    # passes it, or no path ("unverified", "timeout"), never an exception.
+    rng = np.random.default_rng(5)
+    statuses = set()
+    for _ in range(24):
+        seed = int(rng.integers(0, 10_000))
+        resolution = float(rng.choice([0.01, 0.05, 0.2]))
+        planner = DetourPlanner(ARM, PARKED, resolution=resolution)
+        res = planner.plan(START, GOAL, budget=5.0, seed=seed, max_checks=50_000)
+        statuses.add(res.status)
+        assert res.status in ("solved", "unverified", "timeout")
+        if res.status == "solved":
+            assert planner.path_free(res.path)
+        else:
+            assert res.path.shape == (0, ARM.dof)
+    assert "solved" in statuses
