@@ -34,7 +34,7 @@ from __future__ import annotations
 import bisect
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from workcell.sim.comms.medium import BROADCAST
 from workcell.sim.coordination.distributed.plan import arm_of, build_legs, task_pieces
@@ -53,7 +53,41 @@ from workcell.sim.protocol.peers import (
 from workcell.sim.protocol.states import TaskState
 
 if TYPE_CHECKING:
-    from workcell.sim.coordination.distributed.policy import DistributedPolicy
+    from scheduler import Problem, Schedule
+    from workcell.compile import CompiledCell
+    from workcell.sim.comms.link import Link
+    from workcell.sim.events.loop import EventLoop
+    from workcell.sim.events.trace import Trace
+    from workcell.sim.protocol.peers import Resource
+    from workcell.sim.protocol.ports import ArmPort
+
+
+class PeerHost(Protocol):
+    """What a :class:`Peer` reads of the policy that holds the peers
+    (:class:`~workcell.sim.coordination.distributed.policy.DistributedPolicy`;
+    typed here so that the two modules do not import each other)."""
+
+    cc: CompiledCell
+    p: Problem
+    plan: Schedule
+    kernel: EventLoop
+    link: Link
+    trace: Trace
+    arms: list[ArmPort]
+    status: list[TaskState]
+    cause: list[str]
+    cause_kind: list[str]
+    failed_arms: set[int]
+    orders: dict[Resource, list[Piece]]
+    position: dict[Piece, int]
+    start_pieces: list[list[Piece]]
+
+    def set_status(self, t: int, new: TaskState) -> None: ...
+
+    def owner(self, piece: Piece) -> int: ...
+
+    def resource_name(self, piece: Piece) -> str: ...
+
 
 __all__ = ["Peer"]
 
@@ -66,7 +100,7 @@ class Peer:
 
     Parameters
     ----------
-    shared : DistributedPolicy
+    shared : PeerHost
         The run's plan replica, clock, link and the published task records
         (a peer writes only the records of its own tasks).
     a : int
@@ -75,7 +109,7 @@ class Peer:
         ``deliver(kind, payload)`` hands a message to the arm's controller.
     """
 
-    def __init__(self, shared: DistributedPolicy, a: int, deliver: Deliver) -> None:
+    def __init__(self, shared: PeerHost, a: int, deliver: Deliver) -> None:
         self.s = shared
         self.a = a
         self.station = a + 1
