@@ -375,6 +375,11 @@ def _compile(
                         got = _motion(program, arm, q0, cell, shared, active, opts.linear_step)
                     except Unreachable as exc:
                         got = str(exc)
+                    except ValidationError as exc:  # name the cell file, the arm and the task
+                        raise ValidationError(
+                            f"{cell.source or repr(cell.name)}: arms.{arm.name}: "
+                            f"task {task.id!r}: {exc}"
+                        ) from None
                     motions[key] = got
                 if isinstance(got, str):
                     why = got
@@ -493,7 +498,11 @@ def _pair_windows(
     seen: set[int] = set()
     for (_t, a), cm in modes:
         arm = cell.arms[a]
-        t, q = sample_trajectory(arm, cm.trajectory, pad)  # shared by modes of one motion
+        try:
+            t, q = sample_trajectory(arm, cm.trajectory, pad)  # shared by modes of one motion
+        except ValidationError as exc:  # name the cell file and the arm
+            where = cell.source or repr(cell.name)
+            raise ValidationError(f"{where}: arms.{arm.name}: compile.grid: {exc}") from None
         samples.append((t, q))
         if id(q) not in seen:
             seen.add(id(q))
