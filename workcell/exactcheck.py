@@ -94,6 +94,7 @@ from scheduler import Plan, Schedule, validate
 from workcell.arms.base import LinkShape
 from workcell.compile import CompiledCell
 from workcell.geometry import CollisionWorld, sample_trajectory
+from workcell.geometry._zone_sweep_jit import _segment_distance
 from workcell.geometry.reach import grid_block
 
 __all__ = ["ExactRetiming", "inert_grid", "retime_exact"]
@@ -210,45 +211,6 @@ def _capsules(shapes: Sequence[LinkShape]) -> tuple[FloatArray, FloatArray]:
 
 
 @njit(cache=True)
-def _segment_gap(
-    a0: FloatArray, a1: FloatArray, b0: FloatArray, b1: FloatArray
-) -> float:  # pragma: no cover - compiled
-    """Distance between segments ``a0a1`` and ``b0b1`` (closest points, clamped), in scalars."""
-    eps = 1e-18
-    d1x, d1y, d1z = a1[0] - a0[0], a1[1] - a0[1], a1[2] - a0[2]
-    d2x, d2y, d2z = b1[0] - b0[0], b1[1] - b0[1], b1[2] - b0[2]
-    rx, ry, rz = a0[0] - b0[0], a0[1] - b0[1], a0[2] - b0[2]
-    a = d1x * d1x + d1y * d1y + d1z * d1z
-    e = d2x * d2x + d2y * d2y + d2z * d2z
-    f = d2x * rx + d2y * ry + d2z * rz
-    if a <= eps and e <= eps:
-        s = t = 0.0
-    elif a <= eps:
-        s = 0.0
-        t = min(max(f / e, 0.0), 1.0)
-    else:
-        c = d1x * rx + d1y * ry + d1z * rz
-        if e <= eps:
-            t = 0.0
-            s = min(max(-c / a, 0.0), 1.0)
-        else:
-            b = d1x * d2x + d1y * d2y + d1z * d2z
-            den = a * e - b * b
-            s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > eps else 0.0
-            t = (b * s + f) / e
-            if t < 0.0:
-                t = 0.0
-                s = min(max(-c / a, 0.0), 1.0)
-            elif t > 1.0:
-                t = 1.0
-                s = min(max((b - c) / a, 0.0), 1.0)
-    gx = rx + s * d1x - t * d2x
-    gy = ry + s * d1y - t * d2y
-    gz = rz + s * d1z - t * d2z
-    return math.sqrt(gx * gx + gy * gy + gz * gz)
-
-
-@njit(cache=True)
 def _capsules_meet(
     p0x: FloatArray,
     p1x: FloatArray,
@@ -275,7 +237,7 @@ def _capsules_meet(
             continue
         for s in range(p0x.shape[1]):
             for u in range(p0y.shape[1]):
-                if _segment_gap(p0x[i, s], p1x[i, s], p0y[j, u], p1y[j, u]) <= (
+                if _segment_distance(p0x[i, s], p1x[i, s], p0y[j, u], p1y[j, u], 1e-18) <= (
                     rx[s] + ry[u] + 1e-6
                 ):
                     out[k] = True
