@@ -23,39 +23,14 @@ from typing import Any
 import numpy as np
 
 from workcell.geometry import ObstacleSet, plan_detour
+from workcell.sim.coordination.geometric import check_departure
 from workcell.sim.protocol.ports import ArmPort
 
 _Self = Any
 """The :class:`~workcell.sim.coordination.distributed.policy.DistributedPolicy`
 these functions are methods of (typed loosely: that module imports this one)."""
 
-__all__: list[str] = []
-
-
-def check_departure(self: _Self, ctl: ArmPort) -> bool:
-    """Port: the arm's own check before it sets off: the motion to its
-    next station against the other arms' motion; a contact holds it."""
-    assert self.guard is not None
-    blockers = self.guard.blockers(ctl, self.arms)
-    a = ctl.index
-    if not blockers:
-        if self.geo_held.pop(a, None) is not None:
-            self.trace.add(
-                self.kernel.now, "wake", arm=ctl.name, detail="geometric conflict over: go on"
-            )
-        return True
-    if self.geo_held.get(a) != blockers:
-        names = ", ".join(repr(self.p.arm_names[b]) for b in blockers)
-        self.trace.add(
-            self.kernel.now,
-            "sleep",
-            arm=ctl.name,
-            task=self.p.task_names[ctl.leg.task] if ctl.leg is not None else "",
-            detail=f"geometric conflict (S2.12): arm {names} in the way: stop",
-        )
-        self.geo_held[a] = blockers
-        self.arm_moved()
-    return False
+__all__ = ["check_departure"]  # the arm's own check before it sets off: the centralized one
 
 
 def check_way(self: _Self, ctl: ArmPort) -> bool:
