@@ -31,6 +31,7 @@ from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel import State, compile_problem, critical_chain, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
+from scheduler.kernel.critical import task_reasons as kernel_task_reasons
 from scheduler.kernel.resume import Snaps, chunk_size, copy_rows, decode_resume, new_snaps
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
@@ -433,6 +434,64 @@ def _after_ok(pos: IntArray, x: int, t: int, succs: tuple[tuple[int, ...], ...])
     return j < i and all(pos[s] > i for s in succs[x])
 
 
+def _chrono_chain(
+    ev: Evaluator,
+    st: State,
+    order: IntArray,
+    pos: IntArray,
+    chain: list[tuple[int, str, int]],
+    rng: np.random.Generator,
+    max_links: int | None = None,
+) -> list[tuple[int, str, int]]:
+    """The critical chain of a chronological decode, continued through the list.
+
+    Chronological decoding (a blocking oracle) starts every task no earlier
+    than the task before it in the list. Where the compiled chain ends
+    (``"release"``) at a task that starts later than its release, it was
+    held there by that order: the chain goes on with reason ``"list"``, by
+    the task before it in the list that starts at the same time, and from
+    there on with that task's own reasons (:func:`scheduler.kernel.task_reasons`).
+    Without this link the chain of a chronological plan stops after a few
+    tasks, and the moves that would start the held task earlier (before
+    the one that held it, in the list) are never tried.
+    """
+    p = ev.problem
+    inst = ev.inst
+    tol = 1e-6
+    links = p.n_tasks if max_links is None else max_links
+    seen = {t for t, _r, _b in chain}
+    out = list(chain)
+    while out and out[-1][1] == "release" and links > 0:
+        t = out[-1][0]
+        S = float(st.t_start[t])
+        release = float(p.task_release[t]) if ev.release is None else float(ev.release[t])
+        i = int(pos[t])
+        if i <= 0 or release + tol >= S:
+            break
+        x = int(order[i - 1])
+        if abs(float(st.t_start[x]) - S) > tol or x in seen:
+            break
+        out[-1] = (t, "list", x)
+        links -= 1
+        # from x on: its own reasons (a release there may be held by the list again)
+        u = x
+        while links > 0:
+            seen.add(u)
+            rs = kernel_task_reasons(inst, st, u)
+            if not rs:
+                out.append((u, "release", -1))
+                break
+            reason, by = rs[int(rng.integers(len(rs)))] if len(rs) > 1 else rs[0]
+            out.append((u, reason, by))
+            links -= 1
+            if by in seen:
+                break
+            u = by
+        else:
+            break
+    return out
+
+
 def neighbours(
     ev: Evaluator, sol: Solution, rng: np.random.Generator
 ) -> list[Callable[[], tuple[IntArray, IntArray]]]:
@@ -453,6 +512,8 @@ def neighbours(
     chain = critical_chain(ev.inst, st, rng)
     pos = np.full(p.n_tasks, -1, dtype=np.int64)
     pos[sol.order] = np.arange(len(sol.order))
+    if ev.chrono:
+        chain = _chrono_chain(ev, st, sol.order, pos, chain, rng)
     order, current = sol.order, sol.modes
     moves: list[Callable[[], tuple[IntArray, IntArray]]] = []
 
@@ -491,7 +552,7 @@ def neighbours(
         for m in p.task_modes[t]:
             if m != current[t] and ok_mode(m):
                 moves.append(with_mode(t, m))
-        if reason in ("arm", "resource") and by >= 0 and by not in frozen:
+        if reason in ("arm", "resource", "list") and by >= 0 and by not in frozen:
             if _before_ok(pos, t, by, p.task_preds):
                 moves.append(before(t, by))
             if _after_ok(pos, by, t, p.task_succs):
