@@ -31,7 +31,7 @@ from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel import State, compile_problem, critical_chain, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
-from scheduler.kernel.critical import task_reasons as kernel_task_reasons
+from scheduler.kernel.critical import Reasons
 from scheduler.kernel.resume import Snaps, chunk_size, copy_rows, decode_resume, new_snaps
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
@@ -450,7 +450,7 @@ def _chrono_chain(
     (``"release"``) at a task that starts later than its release, it was
     held there by that order: the chain goes on with reason ``"list"``, by
     the task before it in the list that starts at the same time, and from
-    there on with that task's own reasons (:func:`scheduler.kernel.task_reasons`).
+    there on with that task's own reasons (:class:`scheduler.kernel.critical.Reasons`).
     Without this link the chain of a chronological plan stops after a few
     tasks, and the moves that would start the held task earlier (before
     the one that held it, in the list) are never tried.
@@ -461,6 +461,7 @@ def _chrono_chain(
     links = p.n_tasks if max_links is None else max_links
     seen = {t for t, _r, _b in chain}
     out = list(chain)
+    reasons: Reasons | None = None
     while out and out[-1][1] == "release" and links > 0:
         t = out[-1][0]
         S = float(st.t_start[t])
@@ -477,7 +478,9 @@ def _chrono_chain(
         u = x
         while links > 0:
             seen.add(u)
-            rs = kernel_task_reasons(inst, st, u)
+            if reasons is None:
+                reasons = Reasons(inst, st)
+            rs = reasons(u)
             if not rs:
                 out.append((u, "release", -1))
                 break

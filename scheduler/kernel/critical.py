@@ -40,7 +40,16 @@ from scheduler.kernel._jit import njit
 from scheduler.kernel.arrays import Instance, State
 from scheduler.kernel.place import _setup
 
-__all__ = ["ARM", "PRED", "REASONS", "RELEASE", "RESOURCE", "critical_chain", "task_reasons"]
+__all__ = [
+    "ARM",
+    "PRED",
+    "REASONS",
+    "RELEASE",
+    "RESOURCE",
+    "Reasons",
+    "critical_chain",
+    "task_reasons",
+]
 
 PRED, ARM, RESOURCE, RELEASE = 0, 1, 2, 3
 REASONS = ("pred", "arm", "resource", "release")
@@ -199,6 +208,50 @@ def critical_chain(
         (int(t), REASONS[int(k)], int(b))
         for t, k, b in zip(ts.tolist(), kinds.tolist(), bys.tolist(), strict=True)
     ]
+
+
+class Reasons:
+    """:func:`task_reasons` for many tasks of one complete state: the state's
+    index of intervals is built once (a call then costs only the task's own
+    intervals, where :func:`task_reasons` reads the whole state).
+
+    Parameters
+    ----------
+    inst : Instance
+    st : State
+        Every task placed; not changed while this is used.
+    tol : float
+    """
+
+    def __init__(self, inst: Instance, st: State, tol: float = TOL) -> None:
+        T = len(st.t_start)
+        d = inst.data
+        self._d = d
+        self._st = st
+        self._tol = float(tol)
+        self._ptr, self._own_r, self._own_k = _index(st, d.res_lo.shape[0], d.res_lo, T)
+        self._prev = _prev_on_arm(st, d.arm_lo, d.arm_lo.shape[0], T)
+        cap = T + 1 + len(self._own_k) + len(st.tl_task)
+        self._kind: IntArray = np.empty(cap, dtype=np.int64)
+        self._by: IntArray = np.empty(cap, dtype=np.int64)
+
+    def __call__(self, t: int) -> list[tuple[str, int]]:
+        """Every reason why task ``t`` starts when it does: (reason, by)."""
+        n = int(
+            _reasons(
+                self._d,
+                self._st,
+                int(t),
+                self._prev,
+                self._ptr,
+                self._own_r,
+                self._own_k,
+                self._tol,
+                self._kind,
+                self._by,
+            )
+        )
+        return [(REASONS[int(self._kind[i])], int(self._by[i])) for i in range(n)]
 
 
 def task_reasons(inst: Instance, st: State, t: int, tol: float = TOL) -> list[tuple[str, int]]:
