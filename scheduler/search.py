@@ -606,7 +606,8 @@ def local_search(
 
     First improvement over shuffled critical-path moves (re-assign a critical
     task or the task that held it up; move a task before the one that held
-    it up, or that one after it). Equal makespan with a smaller sum of ends
+    it up, or that one after it). With chronological decoding the chain goes
+    on through the list where the list held a task back (:func:`_chrono_chain`). Equal makespan with a smaller sum of ends
     is accepted too. At a local optimum, the best solution is kicked with a
     few random moves (strength grows while nothing improves). Stops at
     ``deadline`` or after ``max_evaluations`` decodes (a work limit makes the
