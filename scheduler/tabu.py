@@ -13,7 +13,10 @@ moves on it:
 * **swap** two consecutive tasks of the chain that follow each other on one
   arm (the critical arcs of the classical job-shop neighbourhoods);
 * **reassign** a critical task to another arm that can do it, inserted where
-  its current start falls in that arm's sequence (or one place either side).
+  its current start falls in that arm's sequence (or one place either side),
+  and, with setup times, also at the place within ``travel_window`` places
+  of that one where it adds the least travel
+  (:func:`scheduler.kernel.critical.cheapest_slot`).
 
 Moves are ranked by an estimate of the makespan through the moved task from
 the current schedule's heads and tails (zones ignored), and only the best few
@@ -49,6 +52,7 @@ from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel import State, compile_problem, seq_decode
 from scheduler.kernel._tabu_jit import GraphArrays, SearchArrays, graph_makespan, tabu_run
+from scheduler.kernel.critical import cheapest_slot
 from scheduler.problem import Problem
 from scheduler.search import Budget, Evaluator, Solution
 from scheduler.setup import NoSetup
@@ -210,8 +214,13 @@ def tabu_search(
     window: int = 1,
     kick: int = 4,
     random_moves: int = 4,
+    travel_window: int = 8,
 ) -> Solution:
     """Improve ``start`` until ``deadline`` or ``max_evaluations`` decodes.
+
+    ``travel_window``: with setup times, a reassigned task is also offered
+    the slot of its new arm's sequence, within this many places of where it
+    starts now, that adds the least travel (0: off).
 
     On a pure FJSP (:func:`pure_fjsp`) the compiled search on the
     disjunctive graph runs instead (:func:`graph_tabu`; one iteration counts
@@ -235,6 +244,7 @@ def tabu_search(
     todo = np.flatnonzero(base.t_mode < 0)
     if len(todo) == 0:
         return start
+    travel = travel_window > 0 and not isinstance(p.setup, NoSetup)
     frozen = ev.frozen
     allowed = ev.allowed
     budget = Budget(ev, deadline, max_evaluations)
@@ -291,6 +301,11 @@ def tabu_search(
                 )
                 for k in range(at - window, at + window + 1):
                     if 0 <= k <= n2:
+                        moves.append(("move", t, m, k))
+                if travel and n2:
+                    # and where it adds the least travel, near where it starts now
+                    k = cheapest_slot(inst, a2, t, seq2, at - travel_window, at + travel_window)
+                    if abs(k - at) > window:
                         moves.append(("move", t, m, k))
         if not moves:
             break

@@ -47,6 +47,7 @@ __all__ = [
     "RELEASE",
     "RESOURCE",
     "Reasons",
+    "cheapest_slot",
     "critical_chain",
     "task_reasons",
 ]
@@ -277,3 +278,57 @@ def task_reasons(inst: Instance, st: State, t: int, tol: float = TOL) -> list[tu
     by: IntArray = np.empty(cap, dtype=np.int64)
     n = int(_reasons(d, st, int(t), prev, ptr, own_r, own_k, float(tol), kind, by))
     return [(REASONS[int(kind[i])], int(by[i])) for i in range(n)]
+
+
+@njit(cache=True)
+def _cheapest_slot(d, a, t, seq, lo, hi):
+    """:func:`cheapest_slot`, compiled."""
+    su = d.su
+    n = seq.shape[0]
+    if lo < 0:
+        lo = 0
+    if hi > n:
+        hi = n
+    best_k = lo
+    best = np.inf
+    for k in range(lo, hi + 1):
+        pre = seq[k - 1] if k > 0 else -1
+        add = _setup(
+            su.kind, su.table, su.arm_off, su.arm_count, su.mode_slot, d.mode_of, a, pre, t
+        )
+        if k < n:
+            post = seq[k]
+            add += _setup(
+                su.kind, su.table, su.arm_off, su.arm_count, su.mode_slot, d.mode_of, a, t, post
+            )
+            add -= _setup(
+                su.kind, su.table, su.arm_off, su.arm_count, su.mode_slot, d.mode_of, a, pre, post
+            )
+        if add < best - 1e-12:
+            best_k = k
+            best = add
+    return best_k
+
+
+def cheapest_slot(inst: Instance, arm: int, t: int, seq: IntArray, lo: int, hi: int) -> int:
+    """Where inserting task ``t`` into arm ``arm``'s sequence adds the least travel.
+
+    Parameters
+    ----------
+    inst : Instance
+    arm : int
+    t : int
+        A task ``arm`` can do, not in ``seq``.
+    seq : (n,) int
+        The arm's tasks in order.
+    lo, hi : int
+        The places tried (``k``: before ``seq[k]``; ``n``: at the end),
+        clipped to ``0..n``.
+
+    Returns
+    -------
+    int
+        The first place of least added setup time (setup into ``t``, plus
+        out of it into the next task, minus the setup it replaces).
+    """
+    return int(_cheapest_slot(inst.data, int(arm), int(t), seq, int(lo), int(hi)))
