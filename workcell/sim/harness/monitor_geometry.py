@@ -13,7 +13,13 @@ from multiarm.types import FloatArray
 from workcell.compile import CompiledCell
 from workcell.geometry import CollisionWorld
 
-__all__ = ["MonitorGeometry", "pair_touches", "segment_dist2", "touching_pairs"]
+__all__ = [
+    "MonitorGeometry",
+    "first_touching_sample",
+    "pair_touches",
+    "segment_dist2",
+    "touching_pairs",
+]
 
 
 _SLACK = 1e-4
@@ -201,3 +207,34 @@ def pair_touches(
             if hit:
                 break
         out[k] = hit
+
+
+@njit(cache=True)
+def first_touching_sample(
+    c: FloatArray,
+    p0: FloatArray,
+    p1: FloatArray,
+    rows: npt.NDArray[np.int64],
+    r2: FloatArray,
+    rc: FloatArray,
+    arm_of: npt.NDArray[np.int64],
+) -> int:
+    """The first of ``n`` samples (shape centres ``c`` and capsule ends ``p0
+    p1``, each (n, shapes, 3)) at which a shape of ``rows`` and a shape of
+    another arm pass the pre-tests of :func:`touching_pairs` (the same
+    arithmetic: meeting bounding spheres, capsules within ``_SLACK``); -1
+    when none does."""
+    for k in range(c.shape[0]):
+        for ii in range(rows.shape[0]):
+            i = rows[ii]
+            ai = arm_of[i]
+            for j in range(c.shape[1]):
+                if arm_of[j] == ai:
+                    continue
+                dx, dy, dz = c[k, i, 0] - c[k, j, 0], c[k, i, 1] - c[k, j, 1], c[k, i, 2] - c[k, j, 2]
+                if dx * dx + dy * dy + dz * dz > r2[i, j]:
+                    continue
+                reach = rc[i] + rc[j] + _SLACK
+                if segment_dist2(p0[k, i], p1[k, i], p0[k, j], p1[k, j]) <= reach * reach:
+                    return k
+    return -1
