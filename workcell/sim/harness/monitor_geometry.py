@@ -59,13 +59,21 @@ class MonitorGeometry:
                 rc.append(r_)
         self.axis = np.array(axes, dtype=float).reshape(-1, 3)
         self.half = np.array(half, dtype=float)
+        # each capsule's axis is a local coordinate axis: its column of the pose
+        self._col = np.argmax(self.axis, axis=1).astype(np.int64)
+        assert np.array_equal(self.axis, np.eye(3)[self._col])
         self.rc = np.array(rc, dtype=float)
         self.fcl_checks = 0
 
     def ends(self, a: int, tfs: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(..., n, 3) ends of arm ``a``'s shapes' capsules for shape poses ``tfs``."""
-        sl = slice(int(self.offsets[a]), int(self.offsets[a + 1]))
-        w = np.einsum("...ij,...j->...i", tfs[..., :3, :3], self.axis[sl]) * self.half[sl, None]
+        lo, hi = int(self.offsets[a]), int(self.offsets[a + 1])
+        n = hi - lo
+        flat = tfs.reshape(-1, n, 4, 4)
+        # the axis column of each shape's rotation (what the rotation does to
+        # the local unit axis, exactly), times the half-length
+        cols = np.moveaxis(flat[:, np.arange(n), :3, self._col[lo:hi]], 0, 1)
+        w = cols.reshape(*tfs.shape[:-2], 3) * self.half[lo:hi, None]
         c = tfs[..., :3, 3]
         return np.ascontiguousarray(c - w), np.ascontiguousarray(c + w)
 
@@ -231,7 +239,11 @@ def first_touching_sample(
             for j in range(c.shape[1]):
                 if arm_of[j] == ai:
                     continue
-                dx, dy, dz = c[k, i, 0] - c[k, j, 0], c[k, i, 1] - c[k, j, 1], c[k, i, 2] - c[k, j, 2]
+                dx, dy, dz = (
+                    c[k, i, 0] - c[k, j, 0],
+                    c[k, i, 1] - c[k, j, 1],
+                    c[k, i, 2] - c[k, j, 2],
+                )
                 if dx * dx + dy * dy + dz * dz > r2[i, j]:
                     continue
                 reach = rc[i] + rc[j] + _SLACK

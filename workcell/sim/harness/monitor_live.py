@@ -23,7 +23,6 @@ from scheduler import Problem
 from workcell.compile import CompiledCell
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
-from workcell.sim.harness.monitor_geometry import first_touching_sample
 from workcell.sim.harness.monitor import (
     MONITOR_PRIORITY,
     MonitorGeometry,
@@ -35,6 +34,7 @@ from workcell.sim.harness.monitor import (
     touching_pairs,
     violation_message,
 )
+from workcell.sim.harness.monitor_geometry import first_touching_sample
 from workcell.sim.protocol.records import MotionLog, TaskRecord
 
 __all__ = ["LiveMonitor"]
@@ -161,7 +161,7 @@ class LiveMonitor:
         self.wakes += 1
         now = self.kernel.now
         arms = self.arms
-        keys = [c.state() for c in arms]
+        keys: list[Any] = [c.state() for c in arms]
         changed = [a for a, key in enumerate(keys) if key != self._keys[a]]
         refresh = self._refresh
         while refresh and refresh[0][0] <= now:
@@ -250,7 +250,7 @@ class LiveMonitor:
         centres and capsule ends (from the positions computed ahead, or
         computed now for at least ``lookahead`` samples)."""
         ent = self._pos[a]
-        if ent is None or ent[0] != key or not (0 <= k - ent[1] and k + n - ent[1] <= len(ent[2])):
+        if ent is None or ent[0] != key or not (k - ent[1] >= 0 and k + n - ent[1] <= len(ent[2])):
             self._fill(a, key, k, max(n, self.lookahead))
             ent = self._pos[a]
             assert ent is not None
@@ -386,8 +386,13 @@ class LiveMonitor:
                 self._against(a, use, None)
             for use in current:
                 self._against(a, use, mine)
+            closed = self._closed
             for key, s, e in new:
-                bisect.insort(self._closed.setdefault(key, {}).setdefault(a, []), (e, s))
+                items = closed.setdefault(key, {}).setdefault(a, [])
+                if not items or items[-1] <= (e, s):
+                    items.append((e, s))  # uses mostly close in time order
+                else:
+                    bisect.insort(items, (e, s))
             cur = self._current
             for key in self._current_keys[a]:
                 del cur[key][a]
@@ -403,20 +408,23 @@ class LiveMonitor:
         tol = self.tol
         closed = self._closed.get(key)
         if closed is not None:
+            after = s + tol
             for b, items in closed.items():
-                if b == a:
-                    continue
+                if b == a or items[-1][0] <= after:
+                    continue  # (sorted by end: none of b's ends after ``use`` starts)
                 for e2, s2 in reversed(items):
-                    if e2 <= s + tol:
+                    if e2 <= after:
                         break
                     self._overlap(key, a, s, e, mine, b, s2, e2, None)
         current = self._current.get(key)
         if current is not None:
+            ver = self._ver
             for b, spans in current.items():
                 if b == a:
                     continue
                 for s2, e2 in spans:
-                    self._overlap(key, a, s, e, mine, b, s2, e2, (b, self._ver[b]))
+                    if min(e, e2) - max(s, s2) > tol:
+                        self._overlap(key, a, s, e, mine, b, s2, e2, (b, ver[b]))
 
     def _overlap(
         self,
