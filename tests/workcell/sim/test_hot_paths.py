@@ -8,14 +8,22 @@ garbage collector while it runs. Seeded random inputs, bit-for-bit equality.
 from __future__ import annotations
 
 import gc
+import math
 from typing import Any
 
 import numpy as np
 import pytest
 
+from workcell import SimOptions, simulate
 from workcell.geometry.zone_sweep import _segments
 from workcell.sim.coordination.guard import GeometryGuard, _swept_box
 from workcell.sim.events.loop import EventLoop
+from workcell.sim.harness.monitor import ZoneWindows
+from workcell.sim.harness.monitor_geometry import (
+    MonitorGeometry,
+    first_touching_sample,
+    touching_pairs,
+)
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -71,3 +79,94 @@ def test_the_loop_pauses_the_collector_and_restores_it() -> None:
             gc.enable()
         else:  # pragma: no cover - the suite runs with the collector on
             gc.disable()
+
+
+@pytest.mark.parametrize("name", ["cell", "scara4"])
+def test_monitor_capsule_ends_are_the_rotated_axes(
+    name: str, request: pytest.FixtureRequest
+) -> None:
+    """The monitor's capsule ends pick each shape's axis column of its pose:
+    exactly the rotated local axis (a rotation times a unit vector) times the
+    half-length, for batches of any shape."""
+    cc: Any = request.getfixturevalue(name)
+    geo = MonitorGeometry(cc)
+    rng = np.random.default_rng(3)
+    for a, arm in enumerate(cc.cell.arms):
+        lim = np.asarray(arm.joint_limits, dtype=float)
+        q = rng.uniform(lim[:, 0], lim[:, 1], size=(int(rng.integers(1, 40)), arm.dof))
+        tfs = arm.shape_transforms(q)
+        sl = slice(int(geo.offsets[a]), int(geo.offsets[a + 1]))
+        w = np.einsum("...ij,...j->...i", tfs[..., :3, :3], geo.axis[sl]) * geo.half[sl, None]
+        c = tfs[..., :3, 3]
+        for got in (geo.ends(a, tfs), [x[None] for x in geo.ends(a, tfs[0])]):
+            assert np.array_equal(got[0], (c - w)[: len(got[0])])
+            assert np.array_equal(got[1], (c + w)[: len(got[1])])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_first_touching_sample_is_the_first_sample_with_a_touching_pair(seed: int) -> None:
+    """The live monitor's batch pre-test finds the first sample at which the
+    per-sample pre-test (:func:`touching_pairs`) marks a pair."""
+    rng = np.random.default_rng(seed)
+    arms = int(rng.integers(2, 5))
+    sizes = rng.integers(1, 5, size=arms)
+    arm_of = np.repeat(np.arange(arms, dtype=np.int64), sizes)
+    s, n = int(sizes.sum()), int(rng.integers(1, 30))
+    radii = rng.uniform(0.01, 0.2, size=s)
+    r2 = (radii[:, None] + radii[None, :]) ** 2
+    r2[arm_of[:, None] == arm_of[None, :]] = -1.0
+    rc = radii * rng.uniform(0.3, 1.0, size=s)
+    c = rng.uniform(0.0, float(rng.uniform(0.3, 3.0)), size=(n, s, 3))
+    axis = rng.normal(size=(n, s, 3)) * rng.uniform(0.0, 0.2, size=(n, s, 1))
+    p0, p1 = c - axis, c + axis
+    movers = sorted(rng.choice(arms, size=int(rng.integers(1, arms + 1)), replace=False))
+    rows = np.flatnonzero(np.isin(arm_of, movers)).astype(np.int64)
+    want = -1
+    for k in range(n):
+        out = np.zeros((arms, arms), dtype=np.bool_)
+        if touching_pairs(c[k], p0[k], p1[k], rows, r2, rc, arm_of, out):
+            want = k
+            break
+    assert first_touching_sample(c, p0, p1, rows, r2, rc, arm_of) == want
+
+
+def _plain_uses(windows: ZoneWindows, rec: Any, t_end: float | None) -> list[Any]:
+    """ZoneWindows.uses as array arithmetic (the plain computation)."""
+    leg = rec.leg
+    if leg is None or leg.kind != "task":
+        return []
+    p = windows.p
+    sh = p.shapes[leg.mode]
+    n_ex = len(sh.exclusive)
+    keys = [("inside exclusive zone", p.zone_names[r]) for r, _s, _e in sh.exclusive]
+    keys += [("moving in shared zone", p.zone_names[r - p.n_zones]) for r, _s, _e in sh.moves]
+    s = np.array([x for _r, x, _y in (*sh.exclusive, *sh.moves)], dtype=float)
+    e = np.array([y for _r, _x, y in (*sh.exclusive, *sh.moves)], dtype=float)
+    t0, t1 = rec.start, rec.end if t_end is None else t_end
+    if rec.moving:
+        tb = rec.tau0 + (t1 - t0)
+        lo, hi = np.maximum(s, rec.tau0), np.minimum(e, tb)
+        idx = np.flatnonzero(hi > lo)
+        return [
+            (keys[i], float(t0 + lo[i] - rec.tau0), float(t0 + hi[i] - rec.tau0))
+            for i in idx.tolist()
+        ]
+    if not t1 > t0:
+        return []
+    inside = np.flatnonzero((s[:n_ex] < rec.tau0) & (rec.tau0 < e[:n_ex]))
+    return [(keys[i], t0, t1) for i in inside.tolist()]
+
+
+def test_zone_uses_are_the_array_computation(scara4: Any, scara4_plan: Any) -> None:
+    """The monitor's zone uses of every record of a run (as they are, and
+    as predicted for ever) are those of the plain array arithmetic."""
+    run = simulate(scara4, scara4_plan, seed=0, options=SimOptions(monitor=False))
+    windows = ZoneWindows(scara4.problem)
+    seen = 0
+    for log in run.arm_logs:
+        for rec in log.records:
+            for t_end in (None, math.inf, rec.end + 1.0):
+                got = windows.uses(rec, t_end)
+                assert got == _plain_uses(windows, rec, t_end)
+                seen += len(got)
+    assert seen > 0

@@ -133,6 +133,10 @@ def test_nominal_runs_pass_and_the_monitor_does_not_change_them(name: str) -> No
         assert on.monitor is on.safety
     assert not [e for e in on.trace if e.kind == "monitor"]
     assert set(on.tasks_frame()["status"]) == {"done"}
+    # every sample while arms move is decided, most of them ahead in batches
+    # without a wake of their own (no pair within reach, no event in between)
+    assert _moving_samples(on, PERIOD) <= on.safety.samples
+    assert on.safety.wakes < on.safety.samples / 2
     # the monitor only reads: the same run, event for event
     assert on.trace.to_dataframe().equals(off.trace.to_dataframe())
     assert on.metrics.executed_makespan == off.metrics.executed_makespan

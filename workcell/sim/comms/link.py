@@ -25,6 +25,8 @@ from workcell.sim.events.trace import Trace
 
 __all__ = ["Link", "LossModel", "Network"]
 
+_TRAJECTORY_BYTES = trajectory_bytes(5)
+
 
 class LossModel(Protocol):
     """What the link needs of a loss fault (:class:`~workcell.sim.harness.faults.MessageLoss`)."""
@@ -95,7 +97,7 @@ class Link:
         Each link ``(src, dst)`` numbers its frames 0, 1, 2, ...; a
         retransmission (``retry > 0``) keeps the number of the original
         (``seq``)."""
-        size = trajectory_bytes(5) if kind == "trajectory" else MESSAGE_BYTES[kind]
+        size = _TRAJECTORY_BYTES if kind == "trajectory" else MESSAGE_BYTES[kind]
         if seq < 0:
             seq = self._next_seq.get((src, dst), 0)
             self._next_seq[(src, dst)] = seq + 1
@@ -136,7 +138,10 @@ class Link:
 
     def _stale(self, frame: Frame, payload: Any, station: int) -> str:
         """Why the receiver drops ``frame`` ("" if it does not)."""
-        seen = self._seen.setdefault((frame.src, frame.dst, station), set())
+        link = (frame.src, frame.dst, station)
+        seen = self._seen.get(link)
+        if seen is None:
+            seen = self._seen[link] = set()
         if frame.seq in seen:
             return f"duplicate (sequence number {frame.seq})"
         seen.add(frame.seq)
@@ -169,17 +174,19 @@ class Link:
             return
         delay = t - frame.send_time
         self.delays.append(delay)
-        dst = station
-        self.trace.add(
+        src = frame.src
+        self.trace.row(
             t,
             "message",
-            arm=self._arm_of(frame.src, dst),
-            message=frame.kind,
-            src=frame.src,
-            dst=dst,
-            size=frame.size,
-            delay=delay,
-            detail=_describe(payload),
+            self._arm_of(src, station),
+            "",
+            "",
+            frame.kind,
+            src,
+            station,
+            frame.size,
+            delay,
+            _describe(payload),
         )
         rx = self.receivers.get(station)
         if rx is not None:

@@ -403,6 +403,10 @@ class BaseMedium:
             rx(frame, now)
 
     def _deliver_all(self, frame: Frame) -> None:
+        dst = frame.dst
+        if dst != BROADCAST:  # one addressee: the common case
+            self._deliver(frame, dst)
+            return
         for s in self.destinations(frame):
             self._deliver(frame, s)
 

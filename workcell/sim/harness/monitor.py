@@ -47,7 +47,15 @@ stretch: it sleeps until the next kernel event instead of waking every
 last decided are tested, all of them in one compiled pass of the pre-tests
 per sample (numba); the positions of a moving arm are computed for a few samples
 ahead at once from its segment in progress (used while that segment lasts,
-recomputed when it changes). The zone and tool invariants do not need
+recomputed when it changes). While arms move and no kernel event comes, the
+records cannot change, so the samples up to the one that sees the next event
+are decided ahead in compiled batches over the segments in progress: the
+monitor wakes only at a sample where a moving arm's capsules come within
+reach of another arm's (where FCL decides, as before), at the sample that
+sees the next event, and at a predicted zone overlap; every sample in
+between is one at which every pair passes the pre-tests apart, so it is
+decided as at a wake (the same samples, the same verdicts, far fewer
+wakes). The zone and tool invariants do not need
 samples: at its next wake after an arm's record changed (a sample, or the
 next event when no arm moves), the monitor computes the intervals of that
 arm's uses (the finished ones, and the ones in progress as if the arm went
@@ -159,13 +167,15 @@ def record_joints(rec: Record, times: FloatArray) -> FloatArray:
 
 
 class ZoneWindows:
-    """The zone windows of every mode of a problem, as arrays (built on first use)."""
+    """The zone windows of every mode of a problem (built on first use)."""
 
     def __init__(self, p: Problem) -> None:
         self.p = p
-        self._modes: dict[int, tuple[list[tuple[str, str]], FloatArray, FloatArray, int]] = {}
+        self._modes: dict[int, tuple[list[tuple[tuple[str, str], float, float]], int]] = {}
 
-    def _mode(self, m: int) -> tuple[list[tuple[str, str]], FloatArray, FloatArray, int]:
+    def _mode(self, m: int) -> tuple[list[tuple[tuple[str, str], float, float]], int]:
+        """``([(key, start, end), ...], n_exclusive)``: the exclusive zones'
+        occupancy windows first, then the shared zones' move windows."""
         got = self._modes.get(m)
         if got is None:
             p = self.p
@@ -174,14 +184,8 @@ class ZoneWindows:
             keys += [
                 ("moving in shared zone", p.zone_names[r - p.n_zones]) for r, _s, _e in sh.moves
             ]
-            se = np.array([(s, e) for _r, s, e in (*sh.exclusive, *sh.moves)], dtype=float)
-            se = se.reshape(-1, 2)
-            got = (
-                keys,
-                np.ascontiguousarray(se[:, 0]),
-                np.ascontiguousarray(se[:, 1]),
-                len(sh.exclusive),
-            )
+            se = [(float(s), float(e)) for _r, s, e in (*sh.exclusive, *sh.moves)]
+            got = ([(k, s, e) for k, (s, e) in zip(keys, se, strict=True)], len(sh.exclusive))
             self._modes[m] = got
         return got
 
@@ -195,21 +199,22 @@ class ZoneWindows:
         t0, t1, leg, tau0, moving = rec.start, rec.end, rec.leg, rec.tau0, rec.moving
         if leg is None or leg.kind != "task":
             return []
-        keys, s, e, n_ex = self._mode(leg.mode)
+        windows, n_ex = self._mode(leg.mode)
         if t_end is not None:
             t1 = t_end
         ta = tau0
-        if moving:
+        if moving:  # the part of each window the trajectory clock runs through
             tb = tau0 + (t1 - t0)
-            lo, hi = np.maximum(s, ta), np.minimum(e, tb)
-            idx = np.flatnonzero(hi > lo)
-            start = (t0 + lo[idx] - ta).tolist()
-            stop = (t0 + hi[idx] - ta).tolist()
-            return [(keys[i], a, b) for i, a, b in zip(idx.tolist(), start, stop, strict=True)]
+            out = []
+            for key, s, e in windows:
+                lo = s if s > ta else ta
+                hi = e if e < tb else tb
+                if hi > lo:
+                    out.append((key, t0 + lo - ta, t0 + hi - ta))
+            return out
         if not t1 > t0:
             return []
-        inside = np.flatnonzero((s[:n_ex] < ta) & (ta < e[:n_ex]))
-        return [(keys[i], t0, t1) for i in inside.tolist()]
+        return [(key, t0, t1) for key, s, e in windows[:n_ex] if s < ta < e]
 
 
 def violation_message(what: str, name: str, a1: str, a2: str, start: float, end: float) -> str:

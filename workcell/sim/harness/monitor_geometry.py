@@ -13,7 +13,13 @@ from multiarm.types import FloatArray
 from workcell.compile import CompiledCell
 from workcell.geometry import CollisionWorld
 
-__all__ = ["MonitorGeometry", "pair_touches", "segment_dist2", "touching_pairs"]
+__all__ = [
+    "MonitorGeometry",
+    "first_touching_sample",
+    "pair_touches",
+    "segment_dist2",
+    "touching_pairs",
+]
 
 
 _SLACK = 1e-4
@@ -53,13 +59,21 @@ class MonitorGeometry:
                 rc.append(r_)
         self.axis = np.array(axes, dtype=float).reshape(-1, 3)
         self.half = np.array(half, dtype=float)
+        # each capsule's axis is a local coordinate axis: its column of the pose
+        self._col = np.argmax(self.axis, axis=1).astype(np.int64)
+        assert np.array_equal(self.axis, np.eye(3)[self._col])
         self.rc = np.array(rc, dtype=float)
         self.fcl_checks = 0
 
     def ends(self, a: int, tfs: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(..., n, 3) ends of arm ``a``'s shapes' capsules for shape poses ``tfs``."""
-        sl = slice(int(self.offsets[a]), int(self.offsets[a + 1]))
-        w = np.einsum("...ij,...j->...i", tfs[..., :3, :3], self.axis[sl]) * self.half[sl, None]
+        lo, hi = int(self.offsets[a]), int(self.offsets[a + 1])
+        n = hi - lo
+        flat = tfs.reshape(-1, n, 4, 4)
+        # the axis column of each shape's rotation (what the rotation does to
+        # the local unit axis, exactly), times the half-length
+        cols = np.moveaxis(flat[:, np.arange(n), :3, self._col[lo:hi]], 0, 1)
+        w = cols.reshape(*tfs.shape[:-2], 3) * self.half[lo:hi, None]
         c = tfs[..., :3, 3]
         return np.ascontiguousarray(c - w), np.ascontiguousarray(c + w)
 
@@ -201,3 +215,38 @@ def pair_touches(
             if hit:
                 break
         out[k] = hit
+
+
+@njit(cache=True)
+def first_touching_sample(
+    c: FloatArray,
+    p0: FloatArray,
+    p1: FloatArray,
+    rows: npt.NDArray[np.int64],
+    r2: FloatArray,
+    rc: FloatArray,
+    arm_of: npt.NDArray[np.int64],
+) -> int:
+    """The first of ``n`` samples (shape centres ``c`` and capsule ends ``p0
+    p1``, each (n, shapes, 3)) at which a shape of ``rows`` and a shape of
+    another arm pass the pre-tests of :func:`touching_pairs` (the same
+    arithmetic: meeting bounding spheres, capsules within ``_SLACK``); -1
+    when none does."""
+    for k in range(c.shape[0]):
+        for ii in range(rows.shape[0]):
+            i = rows[ii]
+            ai = arm_of[i]
+            for j in range(c.shape[1]):
+                if arm_of[j] == ai:
+                    continue
+                dx, dy, dz = (
+                    c[k, i, 0] - c[k, j, 0],
+                    c[k, i, 1] - c[k, j, 1],
+                    c[k, i, 2] - c[k, j, 2],
+                )
+                if dx * dx + dy * dy + dz * dz > r2[i, j]:
+                    continue
+                reach = rc[i] + rc[j] + _SLACK
+                if segment_dist2(p0[k, i], p1[k, i], p0[k, j], p1[k, j]) <= reach * reach:
+                    return k
+    return -1

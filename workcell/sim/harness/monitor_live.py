@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from multiarm.types import FloatArray
 from scheduler import Problem
@@ -33,6 +34,7 @@ from workcell.sim.harness.monitor import (
     touching_pairs,
     violation_message,
 )
+from workcell.sim.harness.monitor_geometry import first_touching_sample
 from workcell.sim.protocol.records import MotionLog, TaskRecord
 
 __all__ = ["LiveMonitor"]
@@ -159,7 +161,7 @@ class LiveMonitor:
         self.wakes += 1
         now = self.kernel.now
         arms = self.arms
-        keys = [c.state() for c in arms]
+        keys: list[Any] = [c.state() for c in arms]
         changed = [a for a, key in enumerate(keys) if key != self._keys[a]]
         refresh = self._refresh
         while refresh and refresh[0][0] <= now:
@@ -175,18 +177,95 @@ class LiveMonitor:
         if nxt == math.inf:
             return  # the run is over: nothing left to change
         moving = any(c.moving() for c in arms)
-        settle = moving or any(self._sampled[a] != keys[a] for a in range(len(arms)))
-        if settle:  # the next sample (events until then are read there)
+        sampled = self._sampled
+        due = self._next_due()
+        if not (moving or any(sampled[a] != keys[a] for a in range(len(arms)))):
+            # nothing moves: nothing changes before the next event
+            wake_at, wake_k = nxt, -1
+        elif any(sampled[a] != keys[a] and not keys[a][2] for a in range(len(arms))):
+            # an arm came to rest or changed: the next sample
             wake_k = self._grid_after(now)
             wake_at = wake_k * self.period
-        else:  # nothing moves: nothing changes before the next event
-            wake_at, wake_k = nxt, -1
-        due = self._next_due()
+        else:  # the next sample some pair may touch at, or that sees the next event
+            wake_k = self._next_sample(now, nxt, due, keys)
+            wake_at = wake_k * self.period
         if due < wake_at:
             wake_at, wake_k = due, -1
         self.kernel.schedule(wake_at, self._wake, wake_k, absolute=True, priority=MONITOR_PRIORITY)
 
     # ------------------------------------------------------------ collisions
+    def _next_sample(self, now: float, nxt: float, due: float, keys: list[Any]) -> int:
+        """The next sample to wake for while some arm moves and every arm at
+        rest has been sampled: the first at which a moving arm's shapes pass
+        the pre-tests against another arm's (its segment in progress going
+        on as it goes), or else the first that sees the next kernel event
+        (the records cannot change before it), or the one at or after
+        ``due``. The samples skipped are decided here, in compiled batches;
+        at each of them every pair would pass the pre-tests apart, so the
+        old wake there could only have found nothing."""
+        first = self._grid_after(now)
+        limit = max(first, self._grid_after(nxt, inclusive=True)) if nxt < math.inf else first
+        if due < limit * self.period:
+            limit = max(first, self._grid_after(due, inclusive=True))
+        movers = [a for a in range(len(self.arms)) if keys[a][2]]
+        if not movers:
+            return first
+        geo = self.geo
+        off = geo.offsets
+        rows = self._rows_of(tuple(movers))
+        k = first
+        while k < limit:
+            n = min(limit - k, self.lookahead)
+            c = np.empty((n, *self._centres.shape))
+            p0 = np.empty_like(c)
+            p1 = np.empty_like(c)
+            c[:] = self._centres
+            p0[:] = self._p0
+            p1[:] = self._p1
+            for a in movers:
+                wc, w0, w1 = self._window(a, keys[a], k, n)
+                sl = slice(off[a], off[a + 1])
+                c[:, sl] = wc
+                p0[:, sl] = w0
+                p1[:, sl] = w1
+            hit = first_touching_sample(c, p0, p1, rows, geo.r2, geo.rc, geo.arm_of)
+            if hit >= 0:
+                self.samples += hit
+                return k + hit
+            self.samples += n
+            k += n
+        return limit
+
+    def _rows_of(self, arms: tuple[int, ...]) -> npt.NDArray[np.int64]:
+        """The shape rows of ``arms`` (cached)."""
+        rows = self._rows.get(arms)
+        if rows is None:
+            off = self.geo.offsets
+            rows = np.concatenate([np.arange(off[a], off[a + 1], dtype=np.int64) for a in arms])
+            self._rows[arms] = rows
+        return rows
+
+    def _window(self, a: int, key: Any, k: int, n: int) -> tuple[FloatArray, ...]:
+        """Moving arm ``a`` at samples ``k .. k + n - 1``: (n, shapes, 3)
+        centres and capsule ends (from the positions computed ahead, or
+        computed now for at least ``lookahead`` samples)."""
+        ent = self._pos[a]
+        if ent is None or ent[0] != key or not (k - ent[1] >= 0 and k + n - ent[1] <= len(ent[2])):
+            self._fill(a, key, k, max(n, self.lookahead))
+            ent = self._pos[a]
+            assert ent is not None
+        i = k - ent[1]
+        return ent[2][i : i + n], ent[4][i : i + n], ent[5][i : i + n]
+
+    def _fill(self, a: int, key: Any, k: int, n: int) -> None:
+        """Compute moving arm ``a``'s positions at samples ``k .. k + n - 1``."""
+        rec = self.arms[a].open_record(self.kernel.now)
+        times = np.arange(k, k + n, dtype=float) * self.period
+        tfs = self.cc.cell.arms[a].shape_transforms(record_joints(rec, times))
+        centres = np.ascontiguousarray(tfs[:, :, :3, 3])
+        p0, p1 = self.geo.ends(a, tfs)
+        self._pos[a] = (key, k, centres, tfs, p0, p1)
+
     def _poses(self, a: int, key: Any, k: int) -> tuple[FloatArray, ...]:
         """Arm ``a`` at sample ``k``: (n, 3) shape centres, (n, 4, 4) shape
         poses and the (n, 3) ends of the shapes' capsules."""
@@ -195,17 +274,17 @@ class LiveMonitor:
         if ent is not None and ent[0] == key and (not moving or 0 <= k - ent[1] < len(ent[2])):
             i = k - ent[1] if moving else 0
             return ent[2][i], ent[3][i], ent[4][i], ent[5][i]
-        ctl = self.arms[a]
-        now = self.kernel.now
-        rec = ctl.open_record(now)
         if moving and k >= 0:  # a few samples ahead, while this segment lasts
-            times = np.arange(k, k + self.lookahead, dtype=float) * self.period
-        else:
-            times = np.array([now])
-        tfs = self.cc.cell.arms[a].shape_transforms(record_joints(rec, times))
+            self._fill(a, key, k, self.lookahead)
+            ent = self._pos[a]
+            assert ent is not None
+            return ent[2][0], ent[3][0], ent[4][0], ent[5][0]
+        now = self.kernel.now
+        rec = self.arms[a].open_record(now)
+        tfs = self.cc.cell.arms[a].shape_transforms(record_joints(rec, np.array([now])))
         centres = np.ascontiguousarray(tfs[:, :, :3, 3])
         p0, p1 = self.geo.ends(a, tfs)
-        self._pos[a] = (key, k, centres, tfs, p0, p1) if k >= 0 or not moving else None
+        self._pos[a] = None if moving else (key, k, centres, tfs, p0, p1)
         return centres[0], tfs[0], p0[0], p1[0]
 
     def _collisions(self, k: int, now: float, keys: list[Any]) -> None:
@@ -226,11 +305,7 @@ class LiveMonitor:
         if not dirty:
             return
         self.samples += 1
-        dkey = tuple(dirty)
-        rows = self._rows.get(dkey)
-        if rows is None:
-            rows = np.concatenate([np.arange(off[a], off[a + 1], dtype=np.int64) for a in dirty])
-            self._rows[dkey] = rows
+        rows = self._rows_of(tuple(dirty))
         self.pair_tests += len(dirty) * (len(self.arms) - 1)
         out = np.zeros((len(self.arms), len(self.arms)), dtype=np.bool_)
         if not touching_pairs(
@@ -311,8 +386,13 @@ class LiveMonitor:
                 self._against(a, use, None)
             for use in current:
                 self._against(a, use, mine)
+            closed = self._closed
             for key, s, e in new:
-                bisect.insort(self._closed.setdefault(key, {}).setdefault(a, []), (e, s))
+                items = closed.setdefault(key, {}).setdefault(a, [])
+                if not items or items[-1] <= (e, s):
+                    items.append((e, s))  # uses mostly close in time order
+                else:
+                    bisect.insort(items, (e, s))
             cur = self._current
             for key in self._current_keys[a]:
                 del cur[key][a]
@@ -328,20 +408,23 @@ class LiveMonitor:
         tol = self.tol
         closed = self._closed.get(key)
         if closed is not None:
+            after = s + tol
             for b, items in closed.items():
-                if b == a:
-                    continue
+                if b == a or items[-1][0] <= after:
+                    continue  # (sorted by end: none of b's ends after ``use`` starts)
                 for e2, s2 in reversed(items):
-                    if e2 <= s + tol:
+                    if e2 <= after:
                         break
                     self._overlap(key, a, s, e, mine, b, s2, e2, None)
         current = self._current.get(key)
         if current is not None:
+            ver = self._ver
             for b, spans in current.items():
                 if b == a:
                     continue
                 for s2, e2 in spans:
-                    self._overlap(key, a, s, e, mine, b, s2, e2, (b, self._ver[b]))
+                    if min(e, e2) - max(s, s2) > tol:
+                        self._overlap(key, a, s, e, mine, b, s2, e2, (b, ver[b]))
 
     def _overlap(
         self,
