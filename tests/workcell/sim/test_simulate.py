@@ -264,7 +264,7 @@ def test_a_blocked_arm_continues_with_an_alternative_trajectory(
             leg.kind == "task"
             and leg.task == task
             and ctl.k == 1
-            and ctl.current_tau() < leg.stations[1].tau - 1e-9
+            and ctl.tau < leg.stations[1].tau - 1e-9  # the asking arm stands at tau
             and not all_arms[other].running
         ):
             return [other]

@@ -18,7 +18,13 @@ __all__: list[str] = []
 
 
 def receive(self: _Self, kind: str, payload: Any) -> None:
-    """A frame from the coordinator (already delivered by the medium)."""
+    """A frame from the coordinator (already delivered by the medium); what
+    it changed is reported on the control channel."""
+    _receive(self, kind, payload)
+    self._report()
+
+
+def _receive(self: _Self, kind: str, payload: Any) -> None:
     if self.failed:
         return
     if kind == "trajectory":

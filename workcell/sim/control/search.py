@@ -95,7 +95,8 @@ def sense_crash(self: _Self, force: float, recovery: float) -> str:
     self.internal("STOP_D", self.leg.task, "excessive force: reflex stop")
     self._pause("crash")
     self.send(self.station, 0, "alarm", ("crash", recovery))
-    self.kernel.schedule(recovery, self._resume, "crash")
+    self.kernel.schedule(recovery, self._event, self._resume, "crash")
+    self._report()
     return "stop"
 
 
@@ -155,7 +156,7 @@ def _plan_mark(self: _Self) -> None:
         return
     now = self.kernel.now
     self._mark_h = self.kernel.schedule(
-        now + max(0.0, tau - self.current_tau()), self._mark, absolute=True
+        now + max(0.0, tau - self.current_tau()), self._event, self._mark, absolute=True
     )
 
 
@@ -183,7 +184,9 @@ def _fire_marks(self: _Self, tau: float) -> None:
             if extra > 0:  # more tries than planned: the clock stands meanwhile
                 self._extra = [leg, si, 1, extra, s.search.try_time]
                 self._extra_due = self.kernel.now + s.search.try_time
-                self._extra_h = self.kernel.schedule(s.search.try_time, self._extra_try)
+                self._extra_h = self.kernel.schedule(
+                    s.search.try_time, self._event, self._extra_try
+                )
                 self._pause("search")
                 return
         else:
@@ -227,7 +230,7 @@ def _extra_try(self: _Self) -> None:
         st[2] = k + 1
         st[4] = leg.searches[si].search.try_time
         self._extra_due = self.kernel.now + st[4]
-        self._extra_h = self.kernel.schedule(st[4], self._extra_try)
+        self._extra_h = self.kernel.schedule(st[4], self._event, self._extra_try)
         return
     self._extra = None
     self._resume("search")
@@ -243,7 +246,7 @@ def _skip_to(self: _Self, tau: float) -> None:
     self.t_ref = self.kernel.now
     self.running = False
     self._cancel()
-    self.notify()
+    self._report(True)
     self._run()
 
 

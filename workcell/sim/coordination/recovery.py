@@ -14,6 +14,7 @@ from typing import Any
 
 from scheduler.reschedule import FrozenTask, reschedule
 from workcell.sim.comms.medium import BROADCAST
+from workcell.sim.protocol.exchange import Fail
 from workcell.sim.protocol.messages import Piece
 from workcell.sim.protocol.states import TaskState
 
@@ -47,8 +48,7 @@ def arm_failed(self: _Self, a: int) -> None:
     """Arm ``a`` failed: give back its resources, reassign its tasks."""
     p = self.p
     self.failed_arms.add(a)
-    arm = self.arms[a]
-    arm.fail()
+    self.channel.order(a, Fail())
     self.trace.add(self.kernel.now, "fault", arm=p.arm_names[a], detail="arm failure")
     h = self.dispatch_h[a]
     if h is not None:

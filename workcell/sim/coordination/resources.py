@@ -8,7 +8,9 @@ Functions here are methods of :class:`~workcell.sim.coordination.centralized.Coo
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Iterable
+from collections.abc import Set as AbstractSet
+from typing import Any, Self
 
 from multiarm.errors import InternalError, UsageError
 from workcell.sim.comms.medium import Frame
@@ -19,7 +21,63 @@ _Self = Any
 """The :class:`~workcell.sim.coordination.centralized.Coordinator` these functions are methods of (bound in its
 class body; typed loosely here: workcell.sim.coordination.centralized imports this module, never the reverse)."""
 
-__all__: list[str] = []
+__all__ = ["Released"]
+
+
+class Released(set[Piece]):
+    """The set of released resource uses, counting what leaves it.
+
+    ``shrunk`` grows whenever a use is taken out again (an arm failure or a
+    withdrawal hands its task's uses back to the plan), so a cached scan
+    position in a resource's order (``Coordinator._grantable``) is
+    known to be stale.
+    """
+
+    __slots__ = ("shrunk",)
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.shrunk = 0
+
+    def discard(self, piece: object) -> None:
+        self.shrunk += 1
+        super().discard(piece)
+
+    def remove(self, piece: Piece) -> None:
+        self.shrunk += 1
+        super().remove(piece)
+
+    def pop(self) -> Piece:
+        self.shrunk += 1
+        return super().pop()
+
+    def clear(self) -> None:
+        self.shrunk += 1
+        super().clear()
+
+    def difference_update(self, *others: Iterable[Any]) -> None:
+        self.shrunk += 1
+        super().difference_update(*others)
+
+    def intersection_update(self, *others: Iterable[Any]) -> None:
+        self.shrunk += 1
+        super().intersection_update(*others)
+
+    def symmetric_difference_update(self, other: Iterable[Piece]) -> None:
+        self.shrunk += 1
+        super().symmetric_difference_update(other)
+
+    def __isub__(self, other: AbstractSet[object]) -> Self:
+        self.shrunk += 1
+        return super().__isub__(other)
+
+    def __iand__(self, other: AbstractSet[object]) -> Self:
+        self.shrunk += 1
+        return super().__iand__(other)
+
+    def __ixor__(self, other: AbstractSet[Any]) -> Self:  # type: ignore[override, misc]
+        self.shrunk += 1
+        return super().__ixor__(other)
 
 
 def receive(self: _Self, frame: Frame) -> None:

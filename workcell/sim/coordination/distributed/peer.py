@@ -58,8 +58,8 @@ if TYPE_CHECKING:
     from workcell.sim.comms.link import Link
     from workcell.sim.events.loop import EventLoop
     from workcell.sim.events.trace import Trace
+    from workcell.sim.protocol.exchange import ArmView
     from workcell.sim.protocol.peers import Resource
-    from workcell.sim.protocol.ports import ArmPort
 
 
 class PeerHost(Protocol):
@@ -73,7 +73,7 @@ class PeerHost(Protocol):
     kernel: EventLoop
     link: Link
     trace: Trace
-    arms: list[ArmPort]
+    book: list[ArmView]
     status: list[TaskState]
     cause: list[str]
     cause_kind: list[str]
@@ -190,7 +190,7 @@ class Peer:
             self.dispatch_h = s.kernel.schedule(depart, self.dispatch_next, absolute=True)
             return
         first = any(q not in self.over for q in s.start_pieces[self.a])
-        legs = build_legs(s.cc, s.plan, s.arms[self.a], t, first)
+        legs = build_legs(s.cc, s.plan, s.book[self.a], t, first)
         s.set_status(t, TaskState.DISPATCHED)
         self.prev = t
         permit = self._startable(t)

@@ -18,9 +18,9 @@ import numpy as np
 
 from scheduler import Problem, Schedule
 from workcell.compile import CompiledCell
+from workcell.sim.protocol.exchange import ArmView
 from workcell.sim.protocol.messages import Leg, Piece, Station
 from workcell.sim.protocol.peers import Resource
-from workcell.sim.protocol.ports import ArmPort
 
 __all__ = ["arm_of", "build_legs", "resource_orders", "task_pieces"]
 
@@ -75,11 +75,12 @@ def resource_orders(p: Problem, plan: Schedule) -> dict[Resource, list[Piece]]:
 
 
 def build_legs(
-    cc: CompiledCell, plan: Schedule, arm: ArmPort, t: int, first_task: bool
+    cc: CompiledCell, plan: Schedule, arm: ArmView, t: int, first_task: bool
 ) -> list[Leg]:
     """The legs of task ``t`` (travel from where the arm stands, then the
     task), with the plan's times at the start and at every border, and the
-    resource uses at their stations (as the S2.7 trajectory message)."""
+    resource uses at their stations (as the S2.7 trajectory message);
+    ``arm`` is the arm's own view (where it stands)."""
     p = cc.problem
     a = arm.index
     m = int(plan.mode[t])
@@ -101,7 +102,8 @@ def build_legs(
     stations.pop(D, None)
     task_st = [stations[k] for k in sorted(stations)] + [end]
     legs: list[Leg] = []
-    travel = arm.arm.move(arm.q, cm.q_start, arm.arm.interpolation)
+    model = cc.cell.arms[a]
+    travel = model.move(arm.q, cm.q_start, model.interpolation)
     first: list[Piece] = []
     if first_task:  # leaving the start zones
         first = [

@@ -50,12 +50,13 @@ from workcell.sim.comms.medium import BROADCAST, Frame
 from workcell.sim.coordination.distributed import geometry
 from workcell.sim.coordination.distributed.peer import Peer
 from workcell.sim.coordination.distributed.plan import arm_of, resource_orders
+from workcell.sim.coordination.geometric import initial_book
 from workcell.sim.coordination.guard import GeometryGuard
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
+from workcell.sim.protocol.exchange import ArmView, BackOffUntil, ControlChannel, Fail
 from workcell.sim.protocol.messages import Piece
 from workcell.sim.protocol.peers import PEER_RECORDS, Activation, Alarm, Resource
-from workcell.sim.protocol.ports import ArmPort
 from workcell.sim.protocol.states import TASK_MACHINE, TaskState
 
 __all__ = ["DistributedPolicy"]
@@ -88,7 +89,7 @@ class DistributedPolicy:
         kernel: EventLoop,
         net: Link,
         trace: Trace,
-        arms: Sequence[ArmPort],
+        channel: ControlChannel,
         *,
         seed: int = 0,
         resolve_budget: float = 0.015,
@@ -98,7 +99,7 @@ class DistributedPolicy:
         resolving: bool = True,
         detours: bool = True,
         detour_checks: int = 10_000,
-        guard_answer: Callable[[ArmPort, Sequence[ArmPort]], Sequence[int]] | None = None,
+        guard_answer: Callable[[ArmView, Sequence[ArmView]], Sequence[int]] | None = None,
     ) -> None:
         self.cc = compiled
         self.p: Problem = compiled.problem
@@ -106,7 +107,11 @@ class DistributedPolicy:
         self.kernel = kernel
         self.link = net
         self.trace = trace
-        self.arms: list[ArmPort] = list(arms)
+        self.channel = channel
+        self.book: list[ArmView] = initial_book(compiled)
+        """Per arm, the view it last reported (its peer reads its own arm
+        there; the others' are their reports)."""
+        self.away_until: dict[int, BackOffUntil] = {}
         self.seed = seed
         self.resolve_budget = float(resolve_budget)
         self.resolving = False
@@ -163,6 +168,7 @@ class DistributedPolicy:
             self.peers.append(peer)
             net.receivers[a + 1] = self._router(a, peer, ctl_rx)
         net.receivers[0] = self._from_controller
+        channel.attach_coordination(self.on_report, self.controller_message)
 
     # ------------------------------------------------------------ plumbing
     def owner(self, piece: Piece) -> int:
@@ -223,13 +229,13 @@ class DistributedPolicy:
             peer.start()
 
     def task_started(self, a: int, t: int, now: float) -> None:
-        """Port: arm ``a`` left task ``t``'s start station."""
+        """Notice: arm ``a`` left task ``t``'s start station."""
         self.set_status(t, TaskState.RUNNING)
         self.stalled = 0
         self.trace.add(now, "task_start", arm=self.p.arm_names[a], task=self.p.task_names[t])
 
     def task_ended(self, a: int, t: int, now: float) -> None:
-        """Port: arm ``a`` ended task ``t``'s trajectory."""
+        """Notice: arm ``a`` ended task ``t``'s trajectory."""
         self.stalled = 0
         self.trace.add(now, "task_end", arm=self.p.arm_names[a], task=self.p.task_names[t])
 
@@ -238,7 +244,7 @@ class DistributedPolicy:
         if a in self.failed_arms:
             return
         self.failed_arms.add(a)
-        self.arms[a].fail()
+        self.channel.order(a, Fail())
         self.trace.add(self.kernel.now, "fault", arm=self.p.arm_names[a], detail="arm failure")
         self.peers[a].fail()
         self.arm_moved()  # it left its place (retracted home): the held arms look again
@@ -301,8 +307,9 @@ class DistributedPolicy:
                 self.peers[arm_of(self.p, self.plan, t)].part_late(t, arrival, part)
 
     # ------------------------------------------------------------ geometry (S2.12)
+    on_report = geometry.on_report
+    blockers = geometry.blockers
     check_departure = geometry.check_departure
-    check_way = geometry.check_way
     arm_moved = geometry.arm_moved
     _recheck = geometry.recheck
     _try_detour = geometry.try_detour
