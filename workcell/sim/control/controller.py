@@ -200,7 +200,7 @@ class ArmController:
         self.geometry = bool(geometry)
         self._asked = False  # a departure request not answered yet
         self._sent_key: tuple[Any, ...] | None = None  # what the last motion report said
-        channel.attach_arm(index, self.take_order)
+        channel.attach_arm(index, self.take_order, self.receive)
         if ticker is not None:
             ticker.arms.append(self)
         # wrist force sensing and force-guided insertion (S1.7)

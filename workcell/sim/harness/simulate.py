@@ -22,6 +22,7 @@ True
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -267,10 +268,7 @@ def simulate(
         )
         arms.append(ctl)
 
-        def rx(frame: Any, ctl: ArmController = ctl) -> None:
-            ctl.receive(frame.kind, frame.payload[0])
-
-        net.receivers[a + 1] = rx
+        net.receivers[a + 1] = functools.partial(channel.at_station, a)
     coord = make_policy(
         coordination,
         cc,

@@ -320,8 +320,10 @@ class ControlChannel:
     def __init__(self, arms: int) -> None:
         self.n_arms = int(arms)
         self._arm_rx: list[Callable[[Any], None] | None] = [None] * self.n_arms
+        self._arm_msg: list[Callable[[str, Any], None] | None] = [None] * self.n_arms
         self._coord_rx: Callable[[int, Any], None] | None = None
         self._local_rx: Callable[[int, str, Any], None] | None = None
+        self._station_rx: Callable[[int, Any], bool] | None = None
         self._next = [[0, 0] for _ in range(self.n_arms)]
         """Per arm: next sequence number of its reports, of its orders."""
         self._seen = [[-1, -1] for _ in range(self.n_arms)]
@@ -329,20 +331,48 @@ class ControlChannel:
         self.sent = 0
         self.stale = 0
 
-    def attach_arm(self, arm: int, receive: Callable[[Any], None]) -> None:
-        """The arm's controller takes its orders with ``receive(order)``."""
+    def attach_arm(
+        self,
+        arm: int,
+        receive: Callable[[Any], None],
+        message: Callable[[str, Any], None] | None = None,
+    ) -> None:
+        """The arm's controller takes its orders with ``receive(order)``
+        and the coordination's messages at its station with
+        ``message(kind, payload)``."""
         self._arm_rx[arm] = receive
+        self._arm_msg[arm] = message
 
     def attach_coordination(
         self,
         receive: Callable[[int, Any], None],
         local: Callable[[int, str, Any], None] | None = None,
+        station: Callable[[int, Any], bool] | None = None,
     ) -> None:
-        """The coordination takes reports with ``receive(arm, report)``;
-        a policy whose peers share the arms' stations also takes the
-        controllers' medium messages with ``local(station, kind, payload)``."""
+        """The coordination takes reports with ``receive(arm, report)``.
+        A policy whose peers share the arms' stations also takes the
+        controllers' messages with ``local(station, kind, payload)`` and
+        the frames that reach arm ``a``'s station first with
+        ``station(a, frame) -> taken``."""
         self._coord_rx = receive
         self._local_rx = local
+        self._station_rx = station
+
+    def at_station(self, arm: int, frame: Any) -> None:
+        """A frame of the medium reached ``arm``'s station: a coordination
+        sharing the station takes it first, else the controller does
+        (``frame.kind``, ``frame.payload[0]``)."""
+        take = self._station_rx
+        if take is not None and take(arm, frame):
+            return
+        self.to_controller(arm, frame.kind, frame.payload[0])
+
+    def to_controller(self, arm: int, kind: str, payload: Any) -> None:
+        """A coordination message handed to ``arm``'s controller at its station."""
+        rx = self._arm_msg[arm]
+        if rx is None:
+            raise InternalError(f"control channel: no controller at arm {arm}'s station")
+        rx(kind, payload)
 
     @property
     def colocated(self) -> bool:

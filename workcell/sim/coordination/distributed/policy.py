@@ -42,7 +42,7 @@ import itertools
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from multiarm.errors import InternalError, UsageError
+from multiarm.errors import InternalError
 from scheduler import Problem, Schedule
 from workcell.compile import CompiledCell
 from workcell.sim.comms.link import Link
@@ -159,16 +159,9 @@ class DistributedPolicy:
         self.detour_checks = int(detour_checks)
         self.detours_on = bool(detours)
         """Work limit of one OMPL detour search (validity checks)."""
-        self.peers: list[Peer] = []
-        for a in range(A):
-            ctl_rx = net.receivers.get(a + 1)
-            if ctl_rx is None:
-                raise UsageError(f"distributed coordination: no controller at station {a + 1}")
-            peer = Peer(self, a, self._local(a, ctl_rx))
-            self.peers.append(peer)
-            net.receivers[a + 1] = self._router(a, peer, ctl_rx)
+        self.peers: list[Peer] = [Peer(self, a, self._local(a)) for a in range(A)]
         net.receivers[0] = self._from_controller
-        channel.attach_coordination(self.on_report, self.controller_message)
+        channel.attach_coordination(self.on_report, self.controller_message, self._at_station)
 
     # ------------------------------------------------------------ plumbing
     def owner(self, piece: Piece) -> int:
@@ -186,26 +179,22 @@ class DistributedPolicy:
         TASK_MACHINE.check(self.status[t], new)
         self.status[t] = new
 
-    def _local(self, a: int, ctl_rx: Any) -> Any:
-        station = a + 1
-
+    def _local(self, a: int) -> Any:
         def deliver(kind: str, payload: Any) -> None:
-            frame = Frame(src=0, dst=station, size=1, kind=kind, payload=(payload, 0))
-            self.kernel.schedule(0.0, ctl_rx, frame)
+            self.kernel.schedule(0.0, self.channel.to_controller, a, kind, payload)
 
         return deliver
 
-    def _router(self, a: int, peer: Peer, ctl_rx: Any) -> Any:
-        def rx(frame: Frame) -> None:
-            payload = frame.payload[0]  # type: ignore[index]
-            if a in self.failed_arms:
-                return  # the arm's station is silent
-            if isinstance(payload, _PEER_TYPES):
-                peer.from_peer(frame.src - 1, frame.kind, payload)
-            else:  # pragma: no cover - nothing else is sent to an arm's station
-                ctl_rx(frame)
-
-        return rx
+    def _at_station(self, a: int, frame: Frame) -> bool:
+        """A frame reached arm ``a``'s station: a peer record is its peer's
+        (a failed arm's station is silent); anything else is the controller's."""
+        payload = frame.payload[0]  # type: ignore[index]
+        if a in self.failed_arms:
+            return True
+        if isinstance(payload, _PEER_TYPES):
+            self.peers[a].from_peer(frame.src - 1, frame.kind, payload)
+            return True
+        return False  # pragma: no cover - nothing else is sent to an arm's station
 
     def _from_controller(self, frame: Frame) -> None:
         """Station 0 has no coordinator: a peer's broadcast reaches it and is
