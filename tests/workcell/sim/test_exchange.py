@@ -100,8 +100,7 @@ def test_task_notices_reach_the_coordinator_as_records(cell: Any, plan: Any) -> 
     kernel.run(until=float(np.min(plan.start)) + 1e-9)
     sent = [f for f in got if f.kind == "trajectory"]
     assert sent
-    legs, _permit = sent[0].payload[0]
-    t = legs[-1].task
+    t = sent[0].payload[0].legs[-1].task  # a Trajectory record
     assert coord.status[t] == "dispatched"
     channel.report(sent[0].dst - 1, TaskStarted(t, kernel.now))
     assert coord.status[t] == "running"

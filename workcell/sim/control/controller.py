@@ -64,7 +64,7 @@ from workcell.sim.protocol.exchange import (
     TaskEnded,
     TaskStarted,
 )
-from workcell.sim.protocol.messages import Leg, Piece, Station
+from workcell.sim.protocol.messages import Leg, Piece, Station, TrajectoryEnd
 from workcell.sim.protocol.records import MotionLog, TaskRecord
 from workcell.sim.protocol.states import ArmState
 
@@ -208,7 +208,7 @@ class ArmController:
         self.searches: dict[int, tuple[InsertSearch, ...]] = dict(searches or {})
         self.pushing = False  # thresholds raised for a search
         self._mark_h: Handle | None = None
-        self._extra: list[Any] | None = None  # [leg, search, next try, last try, seconds left]
+        self._extra: search.ExtraTries | None = None  # tries made while the clock stands
         self._extra_h: Handle | None = None
         self._extra_due = 0.0
 
@@ -246,7 +246,7 @@ class ArmController:
             self._extra_h.cancel()
             self._extra_h = None
             assert self._extra is not None
-            self._extra[4] = max(0.0, self._extra_due - self.kernel.now)
+            self._extra.left = max(0.0, self._extra_due - self.kernel.now)
         self.stops.add(reason)
         if self.running:
             tau = self.current_tau()
@@ -264,10 +264,8 @@ class ArmController:
         self.stops.discard(reason)
         if self._extra is not None and self._extra_h is None and self.stops == {"search"}:
             if not self.failed:
-                self._extra_due = self.kernel.now + float(self._extra[4])
-                self._extra_h = self.kernel.schedule(
-                    float(self._extra[4]), self._event, self._extra_try
-                )
+                self._extra_due = self.kernel.now + self._extra.left
+                self._extra_h = self.kernel.schedule(self._extra.left, self._event, self._extra_try)
             return
         if self.stops or self.leg is None or self.running:
             return
@@ -376,8 +374,8 @@ class ArmController:
         self._leave_station(st)
 
     def _resource_name(self, piece: Piece) -> str:
-        names = self.tool_names if piece[0] == "tool" else self.zone_names
-        return names[piece[1]] if 0 <= piece[1] < len(names) else str(piece[1])
+        names = self.tool_names if piece.kind == "tool" else self.zone_names
+        return names[piece.resource] if 0 <= piece.resource < len(names) else str(piece.resource)
 
     def _zone_event(self, kind: str, piece: Piece, task: int) -> None:
         self.trace.add(
@@ -386,7 +384,7 @@ class ArmController:
             arm=self.name,
             task=self._task_name(task),
             zone=self._resource_name(piece),
-            detail=piece[0],
+            detail=piece.kind,
         )
 
     def _resume_at(self) -> None:
@@ -488,9 +486,11 @@ class ArmController:
             if leg.kind == "task":
                 cause = self._search_failure(leg)
                 if cause is None:
-                    self.send(self.station, 0, "trajectory_end", leg.task)
+                    self.send(self.station, 0, "trajectory_end", TrajectoryEnd(leg.task))
                 else:  # the task ran but failed: told with its cause
-                    self.send(self.station, 0, "trajectory_end", ("failed", leg.task, cause))
+                    self.send(
+                        self.station, 0, "trajectory_end", TrajectoryEnd(leg.task, "failed", cause)
+                    )
 
     def _start_leg(self, leg: Leg) -> None:
         if leg.kind == "task" and leg.marks is None:

@@ -53,7 +53,6 @@ delivered at once (its docstring says why).
 
 from __future__ import annotations
 
-import bisect
 import itertools
 import math
 from collections.abc import Callable, Sequence
@@ -66,11 +65,12 @@ from workcell.compile import CompiledCell
 from workcell.sim.comms.link import Link
 from workcell.sim.coordination import geometric, recovery, resources
 from workcell.sim.coordination.constants import CAUSE_KINDS
+from workcell.sim.coordination.distributed.plan import PieceUse, task_pieces
 from workcell.sim.coordination.guard import GeometryGuard
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
 from workcell.sim.protocol.exchange import ArmView, BackOffUntil, ControlChannel
-from workcell.sim.protocol.messages import Leg, Piece, Station
+from workcell.sim.protocol.messages import Leg, Piece, StartPermit, Station, Trajectory
 from workcell.sim.protocol.states import TASK_MACHINE, TaskState
 from zones import ZoneManager
 from zones.manager import ReportOnly
@@ -187,7 +187,7 @@ class Coordinator:
         """Tasks the last re-solve dropped (:attr:`scheduler.Rescheduled.dropped`)."""
         self.never: set[int] = set()
         """Tasks that cannot run under the current plan (see _build_orders)."""
-        self.task_pieces: dict[int, list[tuple[Piece, float, float, float]]] = {}
+        self.task_pieces: dict[int, list[PieceUse]] = {}
         self.activation: tuple[str, ...] | None = None
         self.activation_acks: set[int] = set()
         self.resolve_latency: list[float] = []
@@ -242,38 +242,9 @@ class Coordinator:
         self.status[t] = new
 
     # ------------------------------------------------------------ plan data
-    def _pieces(self, t: int, plan: Schedule) -> list[tuple[Piece, float, float, float]]:
-        """(piece, acquire tau, release tau, planned wall start) of task ``t``."""
-        p = self.p
-        m = int(plan.mode[t])
-        sh = p.shapes[m]
-        S = float(plan.start[t])
-        w = plan.waits[t]
-        Z = p.n_zones
-        out: list[tuple[Piece, float, float, float]] = []
-        borders = sh.borders
-        wl = w.tolist()
-        cw = [0.0]  # waits at the borders <= x: cw[bisect_right(borders, x)] (as ModeShape.shift)
-        for x in wl:
-            cw.append(cw[-1] + x)
-        for r, s, e in sh.exclusive:
-            out.append((Piece("zone", r, t, s), s, e, S + s + cw[bisect.bisect_right(borders, s)]))
-        wait_at = dict(zip(borders, wl, strict=True))
-        for r, s, e in sh.moves:
-            cuts = [b for b in borders if s < b < e and wait_at[b] > 0]
-            pts = [s, *cuts, e]
-            for p0, p1 in itertools.pairwise(pts):
-                out.append(
-                    (
-                        Piece("move", r - Z, t, p0),
-                        p0,
-                        p1,
-                        S + p0 + cw[bisect.bisect_right(borders, p0)],
-                    )
-                )
-        for r in sh.tools:
-            out.append((Piece("tool", r - 2 * Z, t, 0.0), 0.0, sh.duration, S))
-        return out
+    def _pieces(self, t: int, plan: Schedule) -> list[PieceUse]:
+        """Every resource use of task ``t`` under ``plan``."""
+        return task_pieces(self.p, plan, t)
 
     def _build_orders(self) -> None:
         """Per resource, the uses in plan order (held ones first)."""
@@ -308,9 +279,9 @@ class Coordinator:
             for piece, _s, _e, wall in pieces:
                 if piece in self.released:
                     continue
-                key = (piece[0], piece[1])
+                key = (piece.kind, piece.resource)
                 first = -math.inf if piece in self.held else wall
-                orders.setdefault(key, []).append((first, t, piece[3], piece))
+                orders.setdefault(key, []).append((first, t, piece.tau, piece))
         self.orders = {k: [x[3] for x in sorted(v, key=lambda x: x[:3])] for k, v in orders.items()}
 
     def _grantable(self, piece: Piece) -> bool:
@@ -322,7 +293,7 @@ class Coordinator:
         on from where the last one stopped."""
         if not self.zone_checks:
             return True
-        key = (piece[0], piece[1])
+        key = (piece.kind, piece.resource)
         order = self.orders.get(key)
         if not order:
             return True
@@ -432,7 +403,7 @@ class Coordinator:
         if permit:
             self.permitted.add(t)
         self.arm_busy[a] = True
-        self.net.send(0, a + 1, "trajectory", (legs, permit))
+        self.net.send(0, a + 1, "trajectory", Trajectory(tuple(legs), permit))
 
     def _startable(self, t: int) -> bool:
         return self.kernel.now >= self.release[t] and all(
@@ -444,7 +415,7 @@ class Coordinator:
             return
         self.permitted.add(t)
         a = int(self.p.mode_arm[int(self.plan.mode[t])])
-        self.net.send(0, a + 1, "wake_up", ("start", -1, t, 0.0))
+        self.net.send(0, a + 1, "wake_up", StartPermit(t))
 
     def _on_release(self, t: int) -> None:
         if self.kernel.now >= self.release[t]:

@@ -296,7 +296,7 @@ def _promote(self: _Self, a: int, blockers: list[int]) -> None:
         if not self.pending[b] or self.zm_wait[b] is not None:
             continue
         piece = self.pending[b][0]
-        order = self.orders.get((piece[0], piece[1]), [])
+        order = self.orders.get((piece.kind, piece.resource), [])
         if piece not in order:
             continue
         i = order.index(piece)
@@ -309,7 +309,7 @@ def _promote(self: _Self, a: int, blockers: list[int]) -> None:
             self.kernel.now,
             "grant",
             arm=self.p.arm_names[b],
-            task=self.p.task_names[piece[2]] if piece[2] >= 0 else "",
+            task=self.p.task_names[piece.task] if piece.task >= 0 else "",
             zone=self._zone_name(piece),
             detail=f"geometric deadlock (S2.6): goes before arm {self.p.arm_names[a]!r}",
         )

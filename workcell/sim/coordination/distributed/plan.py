@@ -13,6 +13,7 @@ from __future__ import annotations
 import bisect
 import itertools
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -22,10 +23,25 @@ from workcell.sim.protocol.exchange import ArmView
 from workcell.sim.protocol.messages import Leg, Piece, Station
 from workcell.sim.protocol.peers import Resource
 
-__all__ = ["arm_of", "build_legs", "resource_orders", "task_pieces"]
+__all__ = ["PieceUse", "arm_of", "build_legs", "resource_orders", "task_pieces"]
 
-PieceUse = tuple[Piece, float, float, float]
-"""``(piece, acquire offset, release offset, planned wall time of the acquire)``."""
+
+class PieceUse(NamedTuple):
+    """One use of a resource by a task under a plan (frozen).
+
+    Attributes
+    ----------
+    piece : Piece
+    start, end : float
+        Offsets in the task where it is acquired and given back, seconds.
+    wall : float
+        The plan's time of the acquire, seconds.
+    """
+
+    piece: Piece
+    start: float
+    end: float
+    wall: float
 
 
 def arm_of(p: Problem, plan: Schedule, t: int) -> int:
@@ -48,15 +64,17 @@ def task_pieces(p: Problem, plan: Schedule, t: int) -> list[PieceUse]:
         cw.append(cw[-1] + x)
     out: list[PieceUse] = []
     for r, s, e in sh.exclusive:
-        out.append((Piece("zone", r, t, s), s, e, S + s + cw[bisect.bisect_right(borders, s)]))
+        out.append(
+            PieceUse(Piece("zone", r, t, s), s, e, S + s + cw[bisect.bisect_right(borders, s)])
+        )
     wait_at = dict(zip(borders, wl, strict=True))
     for r, s, e in sh.moves:
         cuts = [b for b in borders if s < b < e and wait_at[b] > 0]
         for p0, p1 in itertools.pairwise([s, *cuts, e]):
             wall = S + p0 + cw[bisect.bisect_right(borders, p0)]
-            out.append((Piece("move", r - Z, t, p0), p0, p1, wall))
+            out.append(PieceUse(Piece("move", r - Z, t, p0), p0, p1, wall))
     for r in sh.tools:
-        out.append((Piece("tool", r - 2 * Z, t, 0.0), 0.0, sh.duration, S))
+        out.append(PieceUse(Piece("tool", r - 2 * Z, t, 0.0), 0.0, sh.duration, S))
     return out
 
 
