@@ -3,6 +3,16 @@
 The golden trace is regenerated with
 ``MULTIARM_REGEN_GOLDEN=1 .venv/bin/python -m pytest -p no:xdist -q
 tests/workcell/sim/test_simulate.py -k golden`` (then review the diff).
+
+The golden trace did not change when S2.12's geometric check, the
+excursion orders, the arm failure and the task notices became records on
+the control channel (``workcell.sim.protocol.exchange``) and the frames'
+payloads became typed records: the channel delivers at once, as the
+synchronous check did, and the payload records describe themselves in the
+trace with the same text, so the same events come at the same times. That
+it stayed byte for byte the same is the check that the coordinator's book,
+built from the arms' reports alone, equals what it used to read from the
+controllers.
 """
 
 from __future__ import annotations
@@ -264,7 +274,7 @@ def test_a_blocked_arm_continues_with_an_alternative_trajectory(
             leg.kind == "task"
             and leg.task == task
             and ctl.k == 1
-            and ctl.current_tau() < leg.stations[1].tau - 1e-9
+            and ctl.tau < leg.stations[1].tau - 1e-9  # the asking arm stands at tau
             and not all_arms[other].running
         ):
             return [other]

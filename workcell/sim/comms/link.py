@@ -148,7 +148,7 @@ class Link:
         task = _frame_task(frame.kind, payload)
         if task < 0 or frame.src != 0:
             return ""
-        if frame.kind == "sleep" and payload[0] == "withdraw":
+        if frame.kind == "sleep" and getattr(payload, "withdraws", False):
             self._cancelled[(station, task)] = frame.seq
             return ""
         cut = self._cancelled.get((station, task), -1)
@@ -214,9 +214,10 @@ class Link:
 def _frame_task(kind: str, payload: Any) -> int:
     """The task a coordinator frame is about (-1: none): a trajectory's, a
     grant's or wake-up's piece ``(kind, index, task, tau)``, a start
-    permission or a withdrawal."""
-    if kind == "trajectory":
-        return int(payload[0][-1].task)
+    permission or a withdrawal (a payload record's ``frame_task``)."""
+    task = getattr(payload, "frame_task", None)
+    if task is not None:
+        return int(task)
     if (
         kind in ("zone_grant", "wake_up", "sleep")
         and isinstance(payload, tuple)
@@ -228,6 +229,9 @@ def _frame_task(kind: str, payload: Any) -> int:
 
 
 def _describe(payload: Any) -> str:
+    describe = getattr(payload, "describe", None)
+    if describe is not None:
+        return str(describe())
     if isinstance(payload, tuple) and len(payload) == 4 and isinstance(payload[0], str):
         return f"{payload[0]} {payload[1]} task {payload[2]} at {payload[3]:.6g}"
     if isinstance(payload, tuple) and payload and isinstance(payload[0], str):

@@ -42,7 +42,7 @@ import numpy as np
 
 from multiarm.types import FloatArray, JointVector
 from workcell.arms import DriveArm
-from workcell.sim.control import excursions, mailbox, search
+from workcell.sim.control import excursions, mailbox, recording, search
 from workcell.sim.control.force import (
     FREE_THRESHOLD,
     ForceSensor,
@@ -57,9 +57,16 @@ from workcell.sim.control.pipeline import (
 )
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
-from workcell.sim.protocol.messages import Leg, Piece, Station
-from workcell.sim.protocol.records import MotionLog, MotionRecord, TaskRecord
-from workcell.sim.protocol.states import ARM_MACHINE, ArmState
+from workcell.sim.protocol.exchange import (
+    ControlChannel,
+    DepartureRequest,
+    Excursion,
+    TaskEnded,
+    TaskStarted,
+)
+from workcell.sim.protocol.messages import Leg, Piece, Station, TrajectoryEnd
+from workcell.sim.protocol.records import MotionLog, TaskRecord
+from workcell.sim.protocol.states import ArmState
 
 __all__ = [
     "INTERNAL_MESSAGES",
@@ -88,6 +95,11 @@ class ArmController:
         Initial joints.
     send : callable
         ``send(src, dst, kind, payload)`` puts a frame on the medium.
+    channel : ControlChannel
+        The S2.12 exchange with the coordination
+        (:mod:`workcell.sim.protocol.exchange`): the controller reports its
+        motion and its tasks' starts and ends there, asks before every
+        departure (when ``geometry``) and takes its orders from it.
     trace : Trace
     period : float
         Sampling period, seconds (for the pipeline offset).
@@ -102,6 +114,9 @@ class ArmController:
         ``insertion="drawn"``; empty: every insertion takes its planned time).
     names : (tuple of str, tuple of str, tuple of str)
         The problem's task, zone and tool names (for the trace).
+    geometry : bool
+        Ask the coordination before every departure (S2.12); else set off
+        without asking.
 
     Attributes
     ----------
@@ -118,6 +133,7 @@ class ArmController:
         arm: DriveArm,
         q0: JointVector,
         send: Callable[[int, int, str, Any], None],
+        channel: ControlChannel,
         trace: Trace,
         period: float,
         ticker: Ticker | None = None,
@@ -125,6 +141,7 @@ class ArmController:
         *,
         searches: dict[int, tuple[InsertSearch, ...]] | None = None,
         names: tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]] = ((), (), ()),
+        geometry: bool = True,
     ) -> None:
         self.task_names, self.zone_names, self.tool_names = names
         self.kernel = kernel
@@ -178,20 +195,20 @@ class ArmController:
         self._chunk: FloatArray = np.zeros((0, arm.dof))
         self._chunk_i = 0
         self._pipe_i = 0
-        self.guard: Callable[[ArmController], bool] | None = None
-        self.probe: Callable[[ArmController], bool] = lambda c: True
-        self.notify: Callable[[], None] = lambda: None
-        self.away: tuple[Any, ...] | None = None  # saved state during a back-off
-        self.away_until: tuple[int, Any, int] | None = None
-        # hooks set by the coordinator side
-        self.on_task_start: Callable[[int, int, float], None] = lambda a, t, now: None
-        self.on_task_end: Callable[[int, int, float], None] = lambda a, t, now: None
+        self.away: Excursion | None = None  # where it left its leg for an excursion
+        self.channel = channel
+        self.geometry = bool(geometry)
+        self._asked = False  # a departure request not answered yet
+        self._sent_key: tuple[Any, ...] | None = None  # what the last motion report said
+        channel.attach_arm(index, self.take_order, self.receive)
+        if ticker is not None:
+            ticker.arms.append(self)
         # wrist force sensing and force-guided insertion (S1.7)
         self.sensor = ForceSensor(force_threshold)
         self.searches: dict[int, tuple[InsertSearch, ...]] = dict(searches or {})
         self.pushing = False  # thresholds raised for a search
         self._mark_h: Handle | None = None
-        self._extra: list[Any] | None = None  # [leg, search, next try, last try, seconds left]
+        self._extra: search.ExtraTries | None = None  # tries made while the clock stands
         self._extra_h: Handle | None = None
         self._extra_due = 0.0
 
@@ -215,69 +232,6 @@ class ArmController:
             return min(self.leg.duration, self.tau + (self.kernel.now - self.t_ref))
         return self.tau
 
-    def state(self) -> ArmState:
-        """The controller's state (:class:`~workcell.sim.protocol.states.ArmState`)."""
-        if self.failed:
-            return ArmState.FAILED
-        if self.leg is None:
-            return ArmState.IDLE
-        if self.running:
-            return ArmState.MOVING
-        return ArmState.AT_STATION if self.at_station else ArmState.STOPPED
-
-    def _close_segment(self) -> None:
-        """End the current motion record at now (every change of the arm's
-        motion closes one: its state is checked against the arm machine)."""
-        st = self.state()
-        ARM_MACHINE.check(self._state_seen, st)
-        self._state_seen = st
-        now = self.kernel.now
-        if now > self._seg_t0 or not self.log.records:
-            leg = self.leg
-            if leg is None:
-                self.log.records.append(
-                    MotionRecord(self._seg_t0, now, None, 0.0, False, self.q.copy())
-                )
-            else:
-                # progress at the record's start
-                tau0 = self.tau + (self._seg_t0 - self.t_ref) if self.running else self.tau
-                self.log.records.append(
-                    MotionRecord(self._seg_t0, now, leg, tau0, self.running, self.sync_error.copy())
-                )
-                if self.running and now > self._seg_t0:
-                    self.trace.add(
-                        self._seg_t0,
-                        "segment",
-                        arm=self.name,
-                        task=self._task_name(leg.task),
-                        delay=now - self._seg_t0,
-                        detail=f"{leg.kind} from offset {tau0:.6g} s",
-                    )
-        self._seg_t0 = now
-
-    def _open_record(self, now: float) -> MotionRecord:
-        """The motion record in progress, as it would be closed at ``now``."""
-        leg = self.leg
-        t0 = self._seg_t0
-        if leg is None:
-            return MotionRecord(t0, now, None, 0.0, False, self.q)
-        tau0 = self.tau + (t0 - self.t_ref) if self.running else self.tau
-        return MotionRecord(t0, now, leg, tau0, self.running, self.sync_error)
-
-    def is_running(self) -> bool:
-        """The trajectory clock runs."""
-        return self.running
-
-    def _record_state(self) -> tuple[Any, ...]:
-        """What the record in progress depends on (equal: the same record)."""
-        leg = self.leg
-        n = len(self.log.tasks)
-        if leg is None:
-            return (self._seg_t0, 0, False, 0.0, n, self.failed, self.q.tobytes())
-        running = self.running
-        tau0 = self.tau + (self._seg_t0 - self.t_ref) if running else self.tau
-        return (self._seg_t0, id(leg), running, tau0, n, self.failed, self.sync_error.tobytes())
-
     def _cancel(self) -> None:
         for h in (self._arrive_h, self._request_h, self._resume_h, self._mark_h):
             if h is not None:
@@ -292,7 +246,7 @@ class ArmController:
             self._extra_h.cancel()
             self._extra_h = None
             assert self._extra is not None
-            self._extra[4] = max(0.0, self._extra_due - self.kernel.now)
+            self._extra.left = max(0.0, self._extra_due - self.kernel.now)
         self.stops.add(reason)
         if self.running:
             tau = self.current_tau()
@@ -301,7 +255,7 @@ class ArmController:
             self.t_ref = self.kernel.now
             self.running = False
             self._cancel()
-            self.notify()
+            self._report(True)
 
     def _unpause(self, reason: str) -> None:
         """End the stop ``reason``; with no stop left the arm goes on: it
@@ -310,8 +264,8 @@ class ArmController:
         self.stops.discard(reason)
         if self._extra is not None and self._extra_h is None and self.stops == {"search"}:
             if not self.failed:
-                self._extra_due = self.kernel.now + float(self._extra[4])
-                self._extra_h = self.kernel.schedule(float(self._extra[4]), self._extra_try)
+                self._extra_due = self.kernel.now + self._extra.left
+                self._extra_h = self.kernel.schedule(self._extra.left, self._event, self._extra_try)
             return
         if self.stops or self.leg is None or self.running:
             return
@@ -324,13 +278,19 @@ class ArmController:
         """Start (or go on) moving towards station k."""
         if self.failed or self.stops or self.leg is None:
             return
-        if self.guard is not None and not self.guard(self):
-            self.stops.add("geometry")  # the coordinator wakes it (S2.12 "stop")
+        if self.geometry:  # S2.12: ask; the answer (an order) sets off or holds
+            self._asked = True
+            self._sent_key = None  # the request carries a view: report the next one
+            self.channel.report(self.index, DepartureRequest(self.view()))
             return
+        self._depart()
+
+    def _depart(self) -> None:
+        """Set off towards station k (the departure is allowed)."""
         self._close_segment()
         self.running = True
         self.t_ref = self.kernel.now
-        self.notify()
+        self._report(True)
         if self.ticker is not None:
             self._chunk_i = len(self._chunk)  # recompute the pipeline's points
             self.ticker.wake()
@@ -344,8 +304,10 @@ class ArmController:
         t_reach = now + max(0.0, st.tau - self.tau - (now - self.t_ref))
         if st.acquire and not st.requested:
             t_req = max(now, max(t_reach, st.notbefore) - self.lookahead)
-            self._request_h = self.kernel.schedule(t_req, self._request, st, absolute=True)
-        self._arrive_h = self.kernel.schedule(t_reach, self._arrive, absolute=True)
+            self._request_h = self.kernel.schedule(
+                t_req, self._event, self._request, st, absolute=True
+            )
+        self._arrive_h = self.kernel.schedule(t_reach, self._event, self._arrive, absolute=True)
         self._plan_mark()
 
     def _request(self, st: Station) -> None:
@@ -371,7 +333,7 @@ class ArmController:
         self._close_segment()
         self.tau = st.tau
         self.running = False
-        self.notify()
+        self._report(True)
         self.t_ref = self.kernel.now
         for piece in st.release:
             self.granted.discard(piece)
@@ -403,15 +365,17 @@ class ArmController:
             return  # a grant, wake-up or permission will call us again
         if st.notbefore > now:
             if self._resume_h is None:
-                self._resume_h = self.kernel.schedule(st.notbefore, self._resume_at, absolute=True)
+                self._resume_h = self.kernel.schedule(
+                    st.notbefore, self._event, self._resume_at, absolute=True
+                )
             return
         if self.stops:
             return
         self._leave_station(st)
 
     def _resource_name(self, piece: Piece) -> str:
-        names = self.tool_names if piece[0] == "tool" else self.zone_names
-        return names[piece[1]] if 0 <= piece[1] < len(names) else str(piece[1])
+        names = self.tool_names if piece.kind == "tool" else self.zone_names
+        return names[piece.resource] if 0 <= piece.resource < len(names) else str(piece.resource)
 
     def _zone_event(self, kind: str, piece: Piece, task: int) -> None:
         self.trace.add(
@@ -420,7 +384,7 @@ class ArmController:
             arm=self.name,
             task=self._task_name(task),
             zone=self._resource_name(piece),
-            detail=piece[0],
+            detail=piece.kind,
         )
 
     def _resume_at(self) -> None:
@@ -435,7 +399,7 @@ class ArmController:
         self.at_station = False
         if st.start:
             self.log.tasks[leg.task] = TaskRecord(leg.task, leg.mode, now)
-            self.on_task_start(self.index, leg.task, now)
+            self.channel.report(self.index, TaskStarted(leg.task, now))
         if st.border >= 0:
             log = self.log.tasks.get(leg.task)
             if log is not None:
@@ -458,17 +422,18 @@ class ArmController:
             self.q = leg.trajectory.q_end.copy()
             self.leg = None
             self._seg_t0 = now
-            self.notify()
+            self._report(True)
             return
         if leg.kind in ("return", "detour"):
             assert self.away is not None
-            saved_leg, k, tau, at_station = self.away
+            saved = self.away
+            k, tau, at_station = saved.station, saved.tau, saved.at_station
             self.away = None
-            self.leg = saved_leg
+            self.leg = saved.leg
             self.k, self.tau, self.t_ref = k, tau, now
             self.at_station = at_station
             self._wait_start = now
-            self.notify()
+            self._report(True)
             if at_station:
                 self._try_pass()
             else:
@@ -482,7 +447,7 @@ class ArmController:
                 self.log.tasks[leg.task] = replace(log, end=now)
             self.pose_task = leg.task
             if self._search_failure(leg) is None:
-                self.on_task_end(self.index, leg.task, now)
+                self.channel.report(self.index, TaskEnded(leg.task, now))
         self.leg = None
         if leg.kind == "task" and np.any(self.sync_error != 0):
             # the lost steps show now (a part misplaced): home the axes (S1.6)
@@ -503,7 +468,7 @@ class ArmController:
                 self.homing = False
                 self._after_leg(leg)
 
-            self.kernel.schedule(seconds, homed)
+            self.kernel.schedule(seconds, self._event, homed)
             return
         self._after_leg(leg)
 
@@ -521,9 +486,11 @@ class ArmController:
             if leg.kind == "task":
                 cause = self._search_failure(leg)
                 if cause is None:
-                    self.send(self.station, 0, "trajectory_end", leg.task)
+                    self.send(self.station, 0, "trajectory_end", TrajectoryEnd(leg.task))
                 else:  # the task ran but failed: told with its cause
-                    self.send(self.station, 0, "trajectory_end", ("failed", leg.task, cause))
+                    self.send(
+                        self.station, 0, "trajectory_end", TrajectoryEnd(leg.task, "failed", cause)
+                    )
 
     def _start_leg(self, leg: Leg) -> None:
         if leg.kind == "task" and leg.marks is None:
@@ -551,12 +518,21 @@ class ArmController:
 
     # --------------------------------------------------- force sensing (S1.7)
 
-    # excursions
+    # the published motion
+    state = recording.state
+    _close_segment = recording._close_segment
+    _open_record = recording._open_record
+    is_running = recording.is_running
+    _record_state = recording._record_state
+
+    # the S2.12 exchange and excursions
+    view = excursions.view
+    _report = excursions._report
+    _event = excursions._event
+    take_order = excursions.take_order
     back_off = excursions.back_off
     take_detour = excursions.take_detour
     come_back = excursions.come_back
-    predict = excursions.predict
-    next_stop_time = excursions.next_stop_time
     held_by_geometry = excursions.held_by_geometry
     release_geometry_hold = excursions.release_geometry_hold
     stuck = excursions.stuck

@@ -1,6 +1,8 @@
-"""The arm controller's excursions and its answers to the geometric check
+"""The arm controller's side of the S2.12 exchange (its reports, the
+answers and orders it takes) and its excursions and its answers to the geometric check
 (S2.6, S2.12): back-offs to the home joints, alternative trajectories, the
-way back, and what the coordinator's check reads (predicted motion, holds).
+way back, and the geometric hold (the orders of
+:mod:`workcell.sim.protocol.exchange`).
 
 Functions here are methods of :class:`~workcell.sim.control.controller.ArmController`
 (bound in its class body), kept apart to keep each module small.
@@ -8,12 +10,24 @@ Functions here are methods of :class:`~workcell.sim.control.controller.ArmContro
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from multiarm.types import FloatArray
 from workcell.arms import JointTrajectory
+from workcell.sim.protocol.exchange import (
+    ArmView,
+    BackOff,
+    ComeBack,
+    Departure,
+    Detour,
+    Excursion,
+    Fail,
+    MotionReport,
+    Order,
+    ReleaseHold,
+)
 from workcell.sim.protocol.messages import Leg, Station
 
 _Self = Any
@@ -23,33 +37,93 @@ class body; typed loosely here: workcell.sim.control.controller imports this mod
 __all__: list[str] = []
 
 
-def back_off(self: _Self, until: tuple[int, Any, int]) -> bool:
-    """Retreat to the home joints out of a mover's way (S2.6 geometric
-    deadlock) and come back once the mover has passed (``until``:
-    its index, leg and station). Returns whether the retreat started."""
+def view(self: _Self) -> ArmView:
+    """The arm's motion and standing now, as it reports them."""
+    return ArmView(
+        self.index,
+        self.leg,
+        self.k,
+        self.tau,
+        self.t_ref,
+        self.running,
+        self.q,
+        self.at_station,
+        "geometry" in self.stops,
+        self.stuck(),
+        self.away is not None,
+        self.pushing,
+        self.failed,
+    )
+
+
+def _report(self: _Self, moved: bool = False) -> None:
+    """Report the view if it changed since the last report (``moved``:
+    the arm started or stopped moving, reported in any case)."""
+    key = (
+        id(self.leg),
+        self.k,
+        self.tau,
+        self.t_ref,
+        self.running,
+        id(self.q),
+        self.at_station,
+        "geometry" in self.stops,
+        self.stuck(),
+        self.away is not None,
+        self.pushing,
+        self.failed,
+    )
+    if not moved and key == self._sent_key:
+        return
+    self._sent_key = key
+    self.channel.report(self.index, MotionReport(self.view(), moved))
+
+
+def _event(self: _Self, callback: Callable[..., object], *args: Any) -> None:
+    """Run a timed step of the controller, then report what changed."""
+    callback(*args)
+    self._report()
+
+
+def take_order(self: _Self, order: Order) -> None:
+    """An answer or an order of the coordination (S2.12, S2.6)."""
+    if isinstance(order, Departure):
+        if self._asked:
+            self._asked = False
+            if order.go:
+                self._depart()
+            else:
+                self.stops.add("geometry")  # S2.12 "stop": released by an order
+    elif isinstance(order, ReleaseHold):
+        self.release_geometry_hold()
+    elif isinstance(order, Detour):
+        self.take_detour(order.trajectory, order.task, order.rejoin)
+    elif isinstance(order, BackOff):
+        self.back_off(order.trajectory)
+    elif isinstance(order, ComeBack):
+        self.come_back()
+    elif isinstance(order, Fail):
+        self.fail()
+    self._report()
+
+
+def back_off(self: _Self, traj: JointTrajectory) -> bool:
+    """Retreat along ``traj`` (to the home joints) out of a mover's way
+    (S2.6 geometric deadlock); the coordination chose it, checked its way
+    and orders the way back once the mover has passed. Returns whether the
+    retreat started."""
     if (
         self.away is not None
         or self.running
         or self.failed
         or self.leg is None
         or self.pushing  # not out of a hole in the middle of a search
+        or traj.duration <= 0
     ):
         return False
-    q = self.position()
-    traj = self.arm.move(q, self.home_q, self.arm.interpolation)
-    if traj.duration <= 0:
-        return False
     task = self.leg.task
-    saved = (self.leg, self.k, self.tau, self.at_station)
-    self.leg = Leg("retreat", task, -1, traj, [Station(traj.duration, end=True)])
-    self.k, self.tau = 0, 0.0
-    if not self.probe(self):  # the way back home is not free either
-        self.leg, self.k, self.tau, self.at_station = saved
-        return False
-    self.leg = saved[0]
     self._close_segment()
-    self.away = saved
-    self.away_until = until
+    self.away = Excursion(self.leg, self.k, self.tau, self.at_station)
     self.leg = Leg("retreat", task, -1, traj, [Station(traj.duration, end=True)])
     self.k, self.tau, self.t_ref = 0, 0.0, self.kernel.now
     self.at_station = False
@@ -91,8 +165,7 @@ def take_detour(self: _Self, traj: JointTrajectory, task: int, rejoin: float | N
             requested=True,
         )
         stations.insert(0, first)
-    self.away = (leg, k2, float(rejoin), False)
-    self.away_until = None
+    self.away = Excursion(leg, k2, float(rejoin), False)
     self._close_segment()
     self.leg = Leg("detour", task, -1, traj, stations)
     self.k, self.tau, self.t_ref = 0, 0.0, self.kernel.now
@@ -105,39 +178,14 @@ def come_back(self: _Self) -> None:
     """Return from a back-off to where the arm stopped."""
     if self.away is None or self.leg is not None:
         return
-    saved_leg, _k, tau, _st = self.away
-    target = saved_leg.trajectory.sample(np.array([tau]))[0]
+    saved = self.away
+    target = saved.leg.trajectory.sample(np.array([saved.tau]))[0]
     traj = self.arm.move(self.q, target, self.arm.interpolation)
-    self.away_until = None
     self._close_segment()
-    self.leg = Leg("return", saved_leg.task, -1, traj, [Station(traj.duration, end=True)])
+    self.leg = Leg("return", saved.leg.task, -1, traj, [Station(traj.duration, end=True)])
     self.k, self.tau, self.t_ref = 0, 0.0, self.kernel.now
     self.at_station = False
     self._run()
-
-
-def predict(self: _Self, times: FloatArray) -> FloatArray:
-    """(N, dof) commanded joints at future ``times`` if the arm keeps going
-    to its next station and stops there (standing arms stand)."""
-    leg = self.leg
-    if leg is None:
-        return np.repeat(self.q[None, :], len(times), axis=0)
-    now = self.kernel.now
-    tau_now = self.current_tau()
-    if not self.running:
-        return np.repeat(leg.trajectory.sample(np.array([tau_now])), len(times), axis=0)
-    stop = leg.stations[self.k].tau
-    taus = np.minimum(stop, tau_now + (times - now))
-    out: FloatArray = leg.trajectory.sample(taus)
-    return out
-
-
-def next_stop_time(self: _Self) -> float:
-    """When the arm reaches its next station if it moves now (seconds)."""
-    leg = self.leg
-    if leg is None:
-        return float(self.kernel.now)
-    return float(self.kernel.now + max(0.0, leg.stations[self.k].tau - self.current_tau()))
 
 
 def held_by_geometry(self: _Self) -> bool:

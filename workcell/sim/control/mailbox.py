@@ -10,6 +10,16 @@ from __future__ import annotations
 
 from typing import Any
 
+from workcell.sim.protocol.messages import (
+    ActivationGo,
+    ActivationStop,
+    AlarmClear,
+    PositionReport,
+    StartPermit,
+    TrajectoryEnd,
+    Withdraw,
+)
+
 _Self = Any
 """The :class:`~workcell.sim.control.controller.ArmController` these functions are methods of (bound in its
 class body; typed loosely here: workcell.sim.control.controller imports this module, never the reverse)."""
@@ -18,46 +28,52 @@ __all__: list[str] = []
 
 
 def receive(self: _Self, kind: str, payload: Any) -> None:
-    """A frame from the coordinator (already delivered by the medium)."""
+    """A frame from the coordinator (already delivered by the medium); what
+    it changed is reported on the control channel."""
+    _receive(self, kind, payload)
+    self._report()
+
+
+def _receive(self: _Self, kind: str, payload: Any) -> None:
     if self.failed:
         return
     if kind == "trajectory":
-        legs, permit = payload
+        legs = payload.legs
         self.internal("TRAJECTORY", legs[-1].task)
-        if permit:
+        if payload.permit:
             self.permit.add(legs[-1].task)
         self.busy = True
         self.legs.extend(legs)
         if self.leg is None:
             self._start_leg(self.legs.pop(0))
     elif kind in ("zone_grant", "wake_up"):
-        if isinstance(payload, tuple) and payload and payload[0] == "start":
-            self.permit.add(int(payload[2]))
-        elif isinstance(payload, tuple) and payload and payload[0] == "alarm_clear":
+        if isinstance(payload, StartPermit):
+            self.permit.add(payload.task)
+        elif isinstance(payload, AlarmClear):
             self.internal("CONTINUE", detail="alarm cleared")
-            self._release_stop(f"alarm#{payload[1]}")
+            self._release_stop(f"alarm#{payload.stop}")
             return
-        elif isinstance(payload, tuple) and payload and payload[0] == "activation":
-            self._release_stop(f"activation#{payload[1]}")
+        elif isinstance(payload, ActivationGo):
+            self._release_stop(f"activation#{payload.stop}")
             return
-        else:
+        else:  # a Piece
             self.granted.add(payload)
         if kind == "wake_up":
             self.internal("CONTINUE")
         self._try_pass()
     elif kind == "sleep":
-        if isinstance(payload, tuple) and payload and payload[0] == "activation":
+        if isinstance(payload, ActivationStop):
             self.internal("STOP_C", detail="zone activation: stop")
-            self._stop_by_id(f"activation#{payload[1]}")
+            self._stop_by_id(f"activation#{payload.stop}")
             self._report_stop()
-            self.send(self.station, 0, "position", (None, self.flange()))
-        elif isinstance(payload, tuple) and payload and payload[0] == "withdraw":
-            self._withdraw(int(payload[2]))
+            self.send(self.station, 0, "position", PositionReport(None, self.flange()))
+        elif isinstance(payload, Withdraw):
+            self._withdraw(payload.task)
         else:
             self.internal("STOP_C", detail="zone not available: stop at its border")
     elif kind == "alarm":
         self.internal("STOP_C", detail="emergency broadcast")
-        self._stop_by_id(f"alarm#{payload[1]}")
+        self._stop_by_id(f"alarm#{payload.stop}")
         self._report_stop()
     elif kind == "active_zone_grant":
         pass
@@ -93,11 +109,11 @@ def _withdraw(self: _Self, t: int) -> None:
         self.stops.discard("withdraw")
     self.legs = [leg for leg in self.legs if leg.task != t]
     self.permit.discard(t)
-    self.granted = {g for g in self.granted if g[2] != t}  # given back by the coordinator
+    self.granted = {g for g in self.granted if g.task != t}  # given back by the coordinator
     if self.leg is None:
         self.busy = False
         self._seg_t0 = self.kernel.now
-        self.send(self.station, 0, "trajectory_end", ("withdrawn", t))
+        self.send(self.station, 0, "trajectory_end", TrajectoryEnd(t, "withdrawn"))
 
 
 def internal(self: _Self, message: str, task: int = -1, detail: str = "") -> None:
@@ -116,9 +132,9 @@ def internal(self: _Self, message: str, task: int = -1, detail: str = "") -> Non
 
 def _report_stop(self: _Self) -> None:
     """Tell the coordinator where it stopped when inside a shared zone (S2.7)."""
-    held = sorted(p for p in self.granted if p[0] == "move")
+    held = sorted(p for p in self.granted if p.kind == "move")
     for p in held:
-        self.send(self.station, 0, "position", (p, self.flange()))
+        self.send(self.station, 0, "position", PositionReport(p, self.flange()))
 
 
 def flange(self: _Self) -> tuple[float, float, float]:

@@ -23,22 +23,47 @@ offsets, so the zone windows of the compiled mode stay valid.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from workcell.arms.profiles import StepperDrive
 from workcell.sim.control.force import CRASH_AXIS, CRASH_FORCE, InsertSearch
-from workcell.sim.protocol.messages import Leg, Mark
+from workcell.sim.protocol.messages import AlarmStop, Leg, Mark
 
 _Self = Any
 """The :class:`~workcell.sim.control.controller.ArmController` these functions are methods of (bound in its
 class body; typed loosely here: workcell.sim.control.controller imports this module, never the reverse)."""
 
-__all__ = ["marks"]
+__all__ = ["ExtraTries", "marks"]
 
 _EPS = 1e-9
 """Seconds: marks this close to a station belong to it."""
+
+
+@dataclass(slots=True)
+class ExtraTries:
+    """The tries of a search made while the leg's clock stands (more than planned).
+
+    Attributes
+    ----------
+    leg : Leg
+    search : int
+        Index of the search in the leg.
+    attempt : int
+        The try under way (1-based).
+    last : int
+        The last try made while the clock stands.
+    left : float
+        Seconds left of the try under way (kept while another stop holds the arm).
+    """
+
+    leg: Leg
+    search: int
+    attempt: int
+    last: int
+    left: float
 
 
 def marks(searches: Sequence[InsertSearch]) -> list[Mark]:
@@ -94,8 +119,9 @@ def sense_crash(self: _Self, force: float, recovery: float) -> str:
         return "below"
     self.internal("STOP_D", self.leg.task, "excessive force: reflex stop")
     self._pause("crash")
-    self.send(self.station, 0, "alarm", ("crash", recovery))
-    self.kernel.schedule(recovery, self._resume, "crash")
+    self.send(self.station, 0, "alarm", AlarmStop(0, "crash", recovery))
+    self.kernel.schedule(recovery, self._event, self._resume, "crash")
+    self._report()
     return "stop"
 
 
@@ -155,7 +181,7 @@ def _plan_mark(self: _Self) -> None:
         return
     now = self.kernel.now
     self._mark_h = self.kernel.schedule(
-        now + max(0.0, tau - self.current_tau()), self._mark, absolute=True
+        now + max(0.0, tau - self.current_tau()), self._event, self._mark, absolute=True
     )
 
 
@@ -173,7 +199,8 @@ def _fire_marks(self: _Self, tau: float) -> None:
     leg = self.leg
     assert leg is not None and leg.marks is not None
     while leg.fired < len(leg.marks) and leg.marks[leg.fired].tau <= tau + _EPS:
-        _t, action, si, k = leg.marks[leg.fired]
+        mark = leg.marks[leg.fired]
+        action, si, k = mark.action, mark.search, mark.attempt
         leg.fired += 1
         s = leg.searches[si]
         if action == "raise":
@@ -181,9 +208,11 @@ def _fire_marks(self: _Self, tau: float) -> None:
             self.set_thresholds(s.search.threshold, f"force-guided search of step {s.step} (S1.7)")
             extra = s.tries - s.planned
             if extra > 0:  # more tries than planned: the clock stands meanwhile
-                self._extra = [leg, si, 1, extra, s.search.try_time]
+                self._extra = ExtraTries(leg, si, 1, extra, s.search.try_time)
                 self._extra_due = self.kernel.now + s.search.try_time
-                self._extra_h = self.kernel.schedule(s.search.try_time, self._extra_try)
+                self._extra_h = self.kernel.schedule(
+                    s.search.try_time, self._event, self._extra_try
+                )
                 self._pause("search")
                 return
         else:
@@ -221,13 +250,13 @@ def _extra_try(self: _Self) -> None:
     st = self._extra
     if st is None or self.failed:
         return
-    leg, si, k, last, _left = st
+    leg, si, k = st.leg, st.search, st.attempt
     self._try_done(leg, leg.searches[si], k)
-    if k < last:
-        st[2] = k + 1
-        st[4] = leg.searches[si].search.try_time
-        self._extra_due = self.kernel.now + st[4]
-        self._extra_h = self.kernel.schedule(st[4], self._extra_try)
+    if k < st.last:
+        st.attempt = k + 1
+        st.left = leg.searches[si].search.try_time
+        self._extra_due = self.kernel.now + st.left
+        self._extra_h = self.kernel.schedule(st.left, self._event, self._extra_try)
         return
     self._extra = None
     self._resume("search")
@@ -243,7 +272,7 @@ def _skip_to(self: _Self, tau: float) -> None:
     self.t_ref = self.kernel.now
     self.running = False
     self._cancel()
-    self.notify()
+    self._report(True)
     self._run()
 
 

@@ -21,8 +21,11 @@ The coordinator executes a :class:`scheduler.Schedule`:
   checks each grant (one arm per exclusive zone, one mover per shared zone,
   tools exclusive) and reports deadlocks, which the plan order excludes.
 * **Geometric conflicts** (S2.6, S2.12). Before an arm sets off towards
-  its next station, :class:`GeometryGuard` checks that motion against the
-  other arms (standing or moving); a contact means *stop*. Around arms
+  its next station it asks (a departure request on the control channel,
+  :mod:`workcell.sim.protocol.exchange`); :class:`GeometryGuard` checks
+  that motion against the other arms (standing or moving) as the
+  coordinator's own book has them (the trajectories it sent and the motion
+  the arms reported); a contact means *stop*. Around arms
   standing in the way the coordinator tries an alternative trajectory (an
   OMPL detour to the next station); failing that, when those arms are
   themselves waiting (a geometric deadlock), they back off to their home
@@ -41,17 +44,19 @@ The coordinator executes a :class:`scheduler.Schedule`:
 
 Every coordinator-arm message is a :class:`~workcell.sim.comms.medium.Frame` of
 the S2.9 size (:data:`~workcell.sim.comms.medium.MESSAGE_BYTES`) through the
-medium; a lost or dropped frame is sent again after a timeout.
+medium; a lost or dropped frame is sent again after a timeout. The S2.12
+exchange (motion reports, departure requests and answers, excursion
+orders, the failure order, task start and end notices) is made of the
+records of :mod:`workcell.sim.protocol.exchange` on the control channel,
+delivered at once (its docstring says why).
 """
 
 from __future__ import annotations
 
-import bisect
 import itertools
 import math
-from collections.abc import Callable, Iterable, Sequence
-from collections.abc import Set as AbstractSet
-from typing import Any, Self
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -60,72 +65,17 @@ from workcell.compile import CompiledCell
 from workcell.sim.comms.link import Link
 from workcell.sim.coordination import geometric, recovery, resources
 from workcell.sim.coordination.constants import CAUSE_KINDS
+from workcell.sim.coordination.distributed.plan import PieceUse, task_pieces
 from workcell.sim.coordination.guard import GeometryGuard
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
-from workcell.sim.protocol.messages import Leg, Piece, Station
-from workcell.sim.protocol.ports import ArmPort
+from workcell.sim.protocol.exchange import ArmView, BackOffUntil, ControlChannel
+from workcell.sim.protocol.messages import Leg, Piece, StartPermit, Station, Trajectory
 from workcell.sim.protocol.states import TASK_MACHINE, TaskState
 from zones import ZoneManager
 from zones.manager import ReportOnly
 
 __all__ = ["CAUSE_KINDS", "Coordinator"]
-
-
-class _Released(set[Piece]):
-    """The set of released resource uses, counting what leaves it.
-
-    ``shrunk`` grows whenever a use is taken out again (an arm failure or a
-    withdrawal hands its task's uses back to the plan), so a cached scan
-    position in a resource's order (:meth:`Coordinator._grantable`) is
-    known to be stale.
-    """
-
-    __slots__ = ("shrunk",)
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.shrunk = 0
-
-    def discard(self, piece: object) -> None:
-        self.shrunk += 1
-        super().discard(piece)
-
-    def remove(self, piece: Piece) -> None:
-        self.shrunk += 1
-        super().remove(piece)
-
-    def pop(self) -> Piece:
-        self.shrunk += 1
-        return super().pop()
-
-    def clear(self) -> None:
-        self.shrunk += 1
-        super().clear()
-
-    def difference_update(self, *others: Iterable[Any]) -> None:
-        self.shrunk += 1
-        super().difference_update(*others)
-
-    def intersection_update(self, *others: Iterable[Any]) -> None:
-        self.shrunk += 1
-        super().intersection_update(*others)
-
-    def symmetric_difference_update(self, other: Iterable[Piece]) -> None:
-        self.shrunk += 1
-        super().symmetric_difference_update(other)
-
-    def __isub__(self, other: AbstractSet[object]) -> Self:
-        self.shrunk += 1
-        return super().__isub__(other)
-
-    def __iand__(self, other: AbstractSet[object]) -> Self:
-        self.shrunk += 1
-        return super().__iand__(other)
-
-    def __ixor__(self, other: AbstractSet[Any]) -> Self:  # type: ignore[override, misc]
-        self.shrunk += 1
-        return super().__ixor__(other)
 
 
 class Coordinator:
@@ -138,7 +88,8 @@ class Coordinator:
     kernel : EventLoop
     net : Link
     trace : Trace
-    arms : list of ArmPort
+    channel : ControlChannel
+        The S2.12 exchange with the arms (:mod:`workcell.sim.protocol.exchange`).
     seed : int
     resolve_budget : float
         Real-time budget of one re-solve, seconds (latency recorded against it).
@@ -159,6 +110,15 @@ class Coordinator:
     guard_answer : callable, optional
         Asked in place of :meth:`GeometryGuard.blockers`
         (:attr:`~workcell.sim.harness.options.SimOptions.guard_answer`).
+
+    Attributes
+    ----------
+    book : list of ArmView
+        Per arm, its motion as the coordinator knows it: the view it last
+        reported (the trajectories in it are those the coordinator sent,
+        or the excursions it ordered).
+    away_until : dict of int -> BackOffUntil
+        The arms it backed off, and the mover each waits for.
     """
 
     def __init__(
@@ -168,7 +128,7 @@ class Coordinator:
         kernel: EventLoop,
         net: Link,
         trace: Trace,
-        arms: Sequence[ArmPort],
+        channel: ControlChannel,
         *,
         seed: int = 0,
         resolve_budget: float = 0.015,
@@ -178,7 +138,7 @@ class Coordinator:
         resolving: bool = True,
         detours: bool = True,
         detour_checks: int = 10_000,
-        guard_answer: Callable[[ArmPort, Sequence[ArmPort]], Sequence[int]] | None = None,
+        guard_answer: Callable[[ArmView, Sequence[ArmView]], Sequence[int]] | None = None,
     ) -> None:
         self.cc = compiled
         self.p: Problem = compiled.problem
@@ -186,7 +146,9 @@ class Coordinator:
         self.kernel = kernel
         self.net = net
         self.trace = trace
-        self.arms: list[ArmPort] = list(arms)
+        self.channel = channel
+        self.book: list[ArmView] = geometric.initial_book(compiled)
+        self.away_until: dict[int, BackOffUntil] = {}
         self.seed = seed
         self.resolve_budget = float(resolve_budget)
         self.resolve_evaluations = int(resolve_evaluations)
@@ -210,7 +172,7 @@ class Coordinator:
         self.pending: list[list[Piece]] = [[] for _ in range(A)]
         self.zm_wait: list[Piece | None] = [None] * A
         self.told_sleep: set[Piece] = set()
-        self.released: set[Piece] = _Released()
+        self.released: set[Piece] = resources.Released()
         self._heads: dict[tuple[str, int], tuple[list[Piece], int, int]] = {}
         """Per resource: (its order list, ``released.shrunk``, index of the
         first use in it not released), the scan position of :meth:`_grantable`."""
@@ -225,7 +187,7 @@ class Coordinator:
         """Tasks the last re-solve dropped (:attr:`scheduler.Rescheduled.dropped`)."""
         self.never: set[int] = set()
         """Tasks that cannot run under the current plan (see _build_orders)."""
-        self.task_pieces: dict[int, list[tuple[Piece, float, float, float]]] = {}
+        self.task_pieces: dict[int, list[PieceUse]] = {}
         self.activation: tuple[str, ...] | None = None
         self.activation_acks: set[int] = set()
         self.resolve_latency: list[float] = []
@@ -248,6 +210,7 @@ class Coordinator:
         # zones, workcell.geometry.reach) are kept apart by the plan order alone.
         self.sdl_zones = frozenset(zm.zone_names())
         net.receivers[0] = self.receive
+        channel.attach_coordination(self.on_report)
         self.guard = (
             GeometryGuard(compiled, clock=lambda: self.kernel.now, answer=guard_answer)
             if geometry
@@ -279,38 +242,9 @@ class Coordinator:
         self.status[t] = new
 
     # ------------------------------------------------------------ plan data
-    def _pieces(self, t: int, plan: Schedule) -> list[tuple[Piece, float, float, float]]:
-        """(piece, acquire tau, release tau, planned wall start) of task ``t``."""
-        p = self.p
-        m = int(plan.mode[t])
-        sh = p.shapes[m]
-        S = float(plan.start[t])
-        w = plan.waits[t]
-        Z = p.n_zones
-        out: list[tuple[Piece, float, float, float]] = []
-        borders = sh.borders
-        wl = w.tolist()
-        cw = [0.0]  # waits at the borders <= x: cw[bisect_right(borders, x)] (as ModeShape.shift)
-        for x in wl:
-            cw.append(cw[-1] + x)
-        for r, s, e in sh.exclusive:
-            out.append((Piece("zone", r, t, s), s, e, S + s + cw[bisect.bisect_right(borders, s)]))
-        wait_at = dict(zip(borders, wl, strict=True))
-        for r, s, e in sh.moves:
-            cuts = [b for b in borders if s < b < e and wait_at[b] > 0]
-            pts = [s, *cuts, e]
-            for p0, p1 in itertools.pairwise(pts):
-                out.append(
-                    (
-                        Piece("move", r - Z, t, p0),
-                        p0,
-                        p1,
-                        S + p0 + cw[bisect.bisect_right(borders, p0)],
-                    )
-                )
-        for r in sh.tools:
-            out.append((Piece("tool", r - 2 * Z, t, 0.0), 0.0, sh.duration, S))
-        return out
+    def _pieces(self, t: int, plan: Schedule) -> list[PieceUse]:
+        """Every resource use of task ``t`` under ``plan``."""
+        return task_pieces(self.p, plan, t)
 
     def _build_orders(self) -> None:
         """Per resource, the uses in plan order (held ones first)."""
@@ -345,9 +279,9 @@ class Coordinator:
             for piece, _s, _e, wall in pieces:
                 if piece in self.released:
                     continue
-                key = (piece[0], piece[1])
+                key = (piece.kind, piece.resource)
                 first = -math.inf if piece in self.held else wall
-                orders.setdefault(key, []).append((first, t, piece[3], piece))
+                orders.setdefault(key, []).append((first, t, piece.tau, piece))
         self.orders = {k: [x[3] for x in sorted(v, key=lambda x: x[:3])] for k, v in orders.items()}
 
     def _grantable(self, piece: Piece) -> bool:
@@ -359,7 +293,7 @@ class Coordinator:
         on from where the last one stopped."""
         if not self.zone_checks:
             return True
-        key = (piece[0], piece[1])
+        key = (piece.kind, piece.resource)
         order = self.orders.get(key)
         if not order:
             return True
@@ -420,7 +354,7 @@ class Coordinator:
 
     def _send_trajectory(self, a: int, t: int) -> None:
         p = self.p
-        arm = self.arms[a]
+        arm = self.cc.cell.arms[a]
         m = int(self.plan.mode[t])
         cm = self.cc.modes[m]
         pieces = self._pieces(t, self.plan)
@@ -442,7 +376,7 @@ class Coordinator:
         stations.pop(D, None)
         task_st = [stations[k] for k in sorted(stations)] + [end]
         legs: list[Leg] = []
-        travel = arm.arm.move(arm.q, cm.q_start, arm.arm.interpolation)
+        travel = arm.move(self.book[a].q, cm.q_start, arm.interpolation)
         first: list[Piece] = []
         if self.prev[a] < 0:  # leaving the start zones
             first = [
@@ -469,7 +403,7 @@ class Coordinator:
         if permit:
             self.permitted.add(t)
         self.arm_busy[a] = True
-        self.net.send(0, a + 1, "trajectory", (legs, permit))
+        self.net.send(0, a + 1, "trajectory", Trajectory(tuple(legs), permit))
 
     def _startable(self, t: int) -> bool:
         return self.kernel.now >= self.release[t] and all(
@@ -481,7 +415,7 @@ class Coordinator:
             return
         self.permitted.add(t)
         a = int(self.p.mode_arm[int(self.plan.mode[t])])
-        self.net.send(0, a + 1, "wake_up", ("start", -1, t, 0.0))
+        self.net.send(0, a + 1, "wake_up", StartPermit(t))
 
     def _on_release(self, t: int) -> None:
         if self.kernel.now >= self.release[t]:
@@ -551,9 +485,11 @@ class Coordinator:
             self._dispatch_next(b)
 
     # geometric
+    on_report = geometric.on_report
+    blockers = geometric.blockers
     check_departure = geometric.check_departure
     try_detour = geometric.try_detour
-    check_way = geometric.check_way
+    back_off = geometric.back_off
     arm_moved = geometric.arm_moved
     _recheck = geometric._recheck
     _promote = geometric._promote

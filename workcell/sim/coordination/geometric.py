@@ -1,6 +1,11 @@
 """The centralized coordinator's geometric conflicts (S2.6, S2.12): the check
 before every departure, alternative trajectories, back-offs and promotions.
 
+Everything here reads the coordinator's own book of the arms
+(``Coordinator.book``: the last :class:`~workcell.sim.protocol.exchange.ArmView`
+each arm reported) and acts by orders on the control channel
+(:mod:`workcell.sim.protocol.exchange`), never on a controller.
+
 Functions here are methods of :class:`~workcell.sim.coordination.centralized.Coordinator`
 (bound in its class body), kept apart to keep each module small.
 """
@@ -12,25 +17,77 @@ from typing import Any
 import numpy as np
 
 from workcell.geometry import DetourPlanner, ObstacleSet
-from workcell.sim.protocol.messages import Leg
-from workcell.sim.protocol.ports import ArmPort
+from workcell.sim.protocol.exchange import (
+    ArmView,
+    BackOff,
+    BackOffUntil,
+    ComeBack,
+    Departure,
+    DepartureRequest,
+    Detour,
+    MotionReport,
+    ReleaseHold,
+    Report,
+    TaskEnded,
+    TaskStarted,
+)
+from workcell.sim.protocol.messages import Leg, Station
 
 _Self = Any
 """The :class:`~workcell.sim.coordination.centralized.Coordinator` these functions are methods of (bound in its
 class body; typed loosely here: workcell.sim.coordination.centralized imports this module, never the reverse)."""
 
-__all__: list[str] = []
+__all__ = ["blockers", "check_departure", "initial_book", "on_report"]
 
 
-def check_departure(self: _Self, ctl: ArmPort) -> bool:
+def initial_book(compiled: Any) -> list[ArmView]:
+    """Every arm standing idle at its start joints (before any report)."""
+    return [
+        ArmView(a, None, 0, 0.0, 0.0, False, np.array(q, dtype=float))
+        for a, q in enumerate(compiled.cell.start)
+    ]
+
+
+def on_report(self: _Self, a: int, report: Report) -> None:
+    """A record from arm ``a`` on the control channel: its view goes into
+    the book; a departure request is answered (S2.12); task notices."""
+    if isinstance(report, MotionReport):
+        self.book[a] = report.view
+        if report.moved and self.guard is not None:
+            self.arm_moved()
+    elif isinstance(report, DepartureRequest):
+        self.book[a] = report.view
+        go = self.guard is None or self.check_departure(report.view)
+        self.channel.order(a, Departure(go))
+    elif isinstance(report, TaskStarted):
+        self.task_started(a, report.task, report.time)
+    elif isinstance(report, TaskEnded):
+        self.task_ended(a, report.task, report.time)
+
+
+def blockers(self: _Self, mover: ArmView) -> list[int]:
+    """The guard's answer for ``mover`` against the book (``mover`` in
+    its arm's place)."""
     assert self.guard is not None
-    blockers = self.guard.blockers(ctl, self.arms)
+    book = list(self.book)
+    book[mover.index] = mover
+    out: list[int] = self.guard.blockers(mover, book)
+    return out
+
+
+def check_departure(self: _Self, ctl: ArmView) -> bool:
+    """S2.12: may the arm of ``ctl`` set off towards its next station?
+    (*continue*; else *stop*, and the arms in its way are recorded.)"""
+    blockers = self.blockers(ctl)
     a = ctl.index
     if not blockers:
         if a in self.geo_held:
             del self.geo_held[a]
             self.trace.add(
-                self.kernel.now, "wake", arm=ctl.name, detail="geometric conflict over: go on"
+                self.kernel.now,
+                "wake",
+                arm=self.p.arm_names[a],
+                detail="geometric conflict over: go on",
             )
         return True
     if self.geo_held.get(a) != blockers:
@@ -38,7 +95,7 @@ def check_departure(self: _Self, ctl: ArmPort) -> bool:
         self.trace.add(
             self.kernel.now,
             "sleep",
-            arm=ctl.name,
+            arm=self.p.arm_names[a],
             task=self.p.task_names[ctl.leg.task] if ctl.leg is not None else "",
             detail=f"geometric conflict (S2.12): arm {names} in the way: stop",
         )
@@ -47,7 +104,7 @@ def check_departure(self: _Self, ctl: ArmPort) -> bool:
     return False
 
 
-def try_detour(self: _Self, ctl: ArmPort) -> bool:
+def try_detour(self: _Self, a: int) -> bool:
     """S2.12 "continue with alternative trajectory": an OMPL path around the
     arms standing in the way (tried once per station; work-limited, so the
     same seed plans the same path).
@@ -57,30 +114,32 @@ def try_detour(self: _Self, ctl: ArmPort) -> bool:
     the standing arms (a zone border of the space grid can), at the first
     pose of the leg after that stretch: the detour then passes the stations
     in between, whose resources the arm holds for the whole detour
-    (:meth:`~workcell.sim.protocol.ports.ArmPort.take_detour`), as the
+    (:class:`~workcell.sim.protocol.exchange.Detour`), as the
     compile's oracle plans it from the knot before the contact to the knot
     after it."""
+    ctl = self.book[a]
+    now = self.kernel.now
     leg = ctl.leg
     blockers = self.geo_held.get(ctl.index, [])
     if (
         not self.detour_planning
         or leg is None
         or leg.kind != "task"
-        or ctl.away is not None
+        or ctl.away
         or not blockers
-        or any(self.arms[b].running for b in blockers)
+        or any(self.book[b].running for b in blockers)
     ):
         return False
     key = (ctl.index, id(leg), ctl.k)
     if key in self.detour_tried:
         return False
     self.detour_tried.add(key)
-    arm = ctl.arm
-    qa = ctl.position()
+    arm = self.cc.cell.arms[a]
+    qa = ctl.position(now)
     items: list[Any] = []
     for b in blockers:
-        other = self.arms[b]
-        items.extend(ObstacleSet.from_arm(other.arm, other.position()).items)
+        other = self.book[b]
+        items.extend(ObstacleSet.from_arm(self.cc.cell.arms[b], other.position(now)).items)
     ctx = DetourPlanner(
         arm, ObstacleSet(items, name="standing arms"), resolution=0.01, clearance=0.02
     )
@@ -104,7 +163,7 @@ def try_detour(self: _Self, ctl: ArmPort) -> bool:
     self.trace.add(
         self.kernel.now,
         "detour",
-        arm=ctl.name,
+        arm=self.p.arm_names[a],
         task=self.p.task_names[leg.task],
         delay=extra,
         detail=f"alternative trajectory around arm(s) "
@@ -112,7 +171,7 @@ def try_detour(self: _Self, ctl: ArmPort) -> bool:
         f"{extra:+.6g} s"
         + (f", past {len(passed)} station(s) to offset {rejoin:.6g} s" if passed else ""),
     )
-    ctl.take_detour(traj, leg.task, rejoin)
+    self.channel.order(a, Detour(traj, leg.task, rejoin))
     if extra > float(self.plan.blocking[leg.task]) + 1e-9:
         self.resolve(f"detour of task {self.p.task_names[leg.task]!r} costs more than planned")
     return True
@@ -139,9 +198,25 @@ def _rejoin(ctx: DetourPlanner, leg: Leg, tau: float, step: float = 0.01) -> flo
     return None
 
 
-def check_way(self: _Self, ctl: ArmPort) -> bool:
-    assert self.guard is not None
-    return not self.guard.blockers(ctl, self.arms)
+def back_off(self: _Self, b: int, until: BackOffUntil) -> bool:
+    """Order arm ``b`` back to its home joints out of a mover's way (S2.6)
+    if it can go (standing on a leg, not pushing, not already away) and
+    its way home is free. Returns whether it was ordered."""
+    v = self.book[b]
+    if v.away or v.running or v.failed or v.leg is None or v.pushing:
+        return False
+    arm = self.cc.cell.arms[b]
+    home = np.asarray(self.cc.cell.start[b], dtype=float)
+    traj = arm.move(v.position(self.kernel.now), home, arm.interpolation)
+    if traj.duration <= 0:
+        return False
+    retreat = Leg("retreat", v.leg.task, -1, traj, [Station(traj.duration, end=True)])
+    probe = ArmView(b, retreat, 0, 0.0, v.t_ref, False, v.q, v.at_station)
+    if self.blockers(probe):  # the way back home is not free either
+        return False
+    self.channel.order(b, BackOff(traj))
+    self.away_until[b] = until
+    return True
 
 
 def arm_moved(self: _Self) -> None:
@@ -169,34 +244,36 @@ def arm_moved(self: _Self) -> None:
 
 def _recheck(self: _Self) -> None:
     self._recheck_h = None
-    for ctl in self.arms:
+    for a in range(self.p.n_arms):
+        ctl = self.book[a]
         if ctl.failed:
             continue
-        if ctl.away is not None and ctl.leg is None and ctl.away_until is not None:
-            ai, leg_a, k_a = ctl.away_until
-            mover = self.arms[ai]
+        until = self.away_until.get(a)
+        if ctl.away and ctl.leg is None and until is not None:
+            mover = self.book[until.mover]
             # back once the mover has finished that task (its leg is over
             # and it is not on an excursion from it), or waits for a grant
-            passed = mover.leg is not leg_a and mover.away is None
-            waits = mover.stuck() and not mover.held_by_geometry()
-            del k_a
+            passed = mover.leg is not until.leg and not mover.away
+            waits = mover.waiting and not mover.held
             if mover.failed or passed or waits:
-                ctl.come_back()
-        if not ctl.held_by_geometry():
+                del self.away_until[a]
+                self.channel.order(a, ComeBack())
+        if not self.book[a].held:
             continue
-        ctl.release_geometry_hold()
-        if ctl.held_by_geometry() and self.try_detour(ctl):
+        self.channel.order(a, ReleaseHold())
+        if self.book[a].held and self.try_detour(a):
             continue
-        if ctl.held_by_geometry():
-            blockers = self.geo_held.get(ctl.index, [])
+        ctl = self.book[a]
+        if ctl.held:
+            blockers = self.geo_held.get(a, [])
             if (
                 blockers
                 and self.backoffs < self.max_backoffs
-                and all(self.arms[b].stuck() and self.arms[b].away is None for b in blockers)
+                and all(self.book[b].waiting and not self.book[b].away for b in blockers)
             ):
                 moved = False
                 for b in blockers:
-                    if self.arms[b].back_off((ctl.index, ctl.leg, ctl.k)):
+                    if self.back_off(b, BackOffUntil(a, ctl.leg, ctl.k)):
                         moved = True
                         self.backoffs += 1
                         self.detours += 1
@@ -205,10 +282,10 @@ def _recheck(self: _Self) -> None:
                             "detour",
                             arm=self.p.arm_names[b],
                             detail=f"geometric deadlock (S2.6): backs off to its home joints "
-                            f"out of arm {ctl.name!r}'s way",
+                            f"out of arm {self.p.arm_names[a]!r}'s way",
                         )
                 if not moved:
-                    self._promote(ctl.index, blockers)
+                    self._promote(a, blockers)
 
 
 def _promote(self: _Self, a: int, blockers: list[int]) -> None:
@@ -219,7 +296,7 @@ def _promote(self: _Self, a: int, blockers: list[int]) -> None:
         if not self.pending[b] or self.zm_wait[b] is not None:
             continue
         piece = self.pending[b][0]
-        order = self.orders.get((piece[0], piece[1]), [])
+        order = self.orders.get((piece.kind, piece.resource), [])
         if piece not in order:
             continue
         i = order.index(piece)
@@ -232,7 +309,7 @@ def _promote(self: _Self, a: int, blockers: list[int]) -> None:
             self.kernel.now,
             "grant",
             arm=self.p.arm_names[b],
-            task=self.p.task_names[piece[2]] if piece[2] >= 0 else "",
+            task=self.p.task_names[piece.task] if piece.task >= 0 else "",
             zone=self._zone_name(piece),
             detail=f"geometric deadlock (S2.6): goes before arm {self.p.arm_names[a]!r}",
         )

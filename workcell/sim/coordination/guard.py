@@ -15,7 +15,7 @@ from workcell.compile import CompiledCell
 from workcell.geometry import CollisionWorld
 from workcell.geometry._zone_sweep_jit import capsules_touch, segment_points
 from workcell.geometry.zone_sweep import _segment_distances, _shape_capsules
-from workcell.sim.protocol.ports import ArmPort
+from workcell.sim.protocol.exchange import ArmView
 
 __all__ = ["GeometryGuard"]
 
@@ -50,7 +50,8 @@ class GeometryGuard:
     """The coordinator's geometric check (S2.6, S2.12) before an arm moves.
 
     The coordinator knows every trajectory it sent and where every standing
-    arm is (position reports). Before an arm sets off towards its next
+    arm is (its book of the arms' reports,
+    :class:`~workcell.sim.protocol.exchange.ArmView`). Before an arm sets off towards its next
     station it checks that motion, sampled every ``dt`` seconds, against
     every other arm: a standing arm where it stands, a moving arm along its
     trajectory until its own next station (where it may stop; it is checked
@@ -71,7 +72,9 @@ class GeometryGuard:
     clock : callable
         ``clock()`` -> the simulated time now, seconds.
     answer : callable, optional
-        ``answer(mover, arms) -> indices``, asked in place of the check
+        ``answer(mover, book) -> indices`` (``mover`` and the book's
+        entries :class:`~workcell.sim.protocol.exchange.ArmView`, the mover
+        in its own place in the book), asked in place of the check
         (:attr:`~workcell.sim.harness.options.SimOptions.guard_answer`:
         an ablation for tests).
     """
@@ -82,7 +85,7 @@ class GeometryGuard:
         dt: float = 0.01,
         padding: float = 0.02,
         clock: Callable[[], float] = lambda: 0.0,
-        answer: Callable[[ArmPort, Sequence[ArmPort]], Sequence[int]] | None = None,
+        answer: Callable[[ArmView, Sequence[ArmView]], Sequence[int]] | None = None,
     ) -> None:
         self.clock = clock
         self.answer = answer
@@ -107,7 +110,7 @@ class GeometryGuard:
             self.world.add_arm(arm, q=q, padding=self.padding / 2)
         self.checks = 0
 
-    def _box(self, ctl: ArmPort) -> FloatArray:
+    def _box(self, ctl: ArmView) -> FloatArray:
         """(2, 3) box holding everything the arm may sweep on its current leg
         (or where it stands), grown by the padding; cached per leg."""
         leg = ctl.leg
@@ -136,7 +139,7 @@ class GeometryGuard:
         self._boxes[key] = (box, leg if leg is not None else ctl.q, tuple(box.ravel().tolist()))
         return box
 
-    def _box_floats(self, ctl: ArmPort) -> tuple[float, ...]:
+    def _box_floats(self, ctl: ArmView) -> tuple[float, ...]:
         """:meth:`_box` as six floats ``(x0, y0, z0, x1, y1, z1)``."""
         leg = ctl.leg
         got = self._boxes.get(id(leg) if leg is not None else -1 - ctl.index)
@@ -153,8 +156,9 @@ class GeometryGuard:
         pts = segment_points(fr, idx, hw)
         return pts[0], pts[1]
 
-    def blockers(self, mover: ArmPort, arms: list[ArmPort]) -> list[int]:
-        """Arms in the way of ``mover``'s motion to its next station."""
+    def blockers(self, mover: ArmView, arms: Sequence[ArmView]) -> list[int]:
+        """Arms in the way of ``mover``'s motion to its next station
+        (``arms``: every arm's view, ``mover`` among them)."""
         if self.answer is not None:
             self.checks += 1
             return [int(b) for b in self.answer(mover, arms)]
@@ -170,7 +174,7 @@ class GeometryGuard:
         mx0, my0, mz0, mx1, my1, mz1 = self._box_floats(mover)
         near = []
         for o in arms:
-            if o is mover:
+            if o.index == mover.index:
                 continue
             ox0, oy0, oz0, ox1, oy1, oz1 = self._box_floats(o)
             if (
@@ -186,7 +190,7 @@ class GeometryGuard:
             return []
         now = self.clock()
         # until the mover and every moving arm near it reach their next stations
-        horizon = max([dur] + [o.next_stop_time() - now for o in near if o.running])
+        horizon = max([dur] + [o.next_stop_time(now) - now for o in near if o.running])
         n = max(2, math.ceil(horizon / self.dt) + 1)
         off = np.arange(n, dtype=float) * (horizon / (n - 1))  # np.linspace(0, horizon, n)
         off[-1] = horizon
@@ -199,7 +203,7 @@ class GeometryGuard:
         lx0, ly0, lz0, hx1, hy1, hz1 = _swept_box(a0, a1, reach).tolist()
         for other in near:
             # a standing arm is sampled once
-            qb = other.predict(times if other.running else times[:1])
+            qb = other.predict(times if other.running else times[:1], now)
             b0, b1 = self._ends(other.index, qb)
             rb = self.capsules[other.index][1]
             bx0, by0, bz0, bx1, by1, bz1 = _swept_box(b0, b1, self._reach[other.index]).tolist()
@@ -220,7 +224,7 @@ class GeometryGuard:
                     np.ascontiguousarray(rb, dtype=float),
                     self.padding,
                 )
-            if hit.any() and self._confirm(mover.index, qa, other.index, other, times, hit):
+            if hit.any() and self._confirm(mover.index, qa, other, times, now, hit):
                 out.append(other.index)
         return out
 
@@ -228,16 +232,16 @@ class GeometryGuard:
         self,
         a: int,
         qa: FloatArray,
-        b: int,
-        other: ArmPort,
+        other: ArmView,
         times: FloatArray,
+        now: float,
         near: FloatArray,
     ) -> bool:
         """FCL (shapes grown by half the padding) on the capsule test's candidates."""
         idx = np.flatnonzero(near)
-        arm_a, arm_b = self.cell.arms[a], self.cell.arms[b]
+        arm_a, arm_b = self.cell.arms[a], self.cell.arms[other.index]
         tfa = arm_a.shape_transforms(qa[idx])
-        tfb = arm_b.shape_transforms(other.predict(times[idx]))
+        tfb = arm_b.shape_transforms(other.predict(times[idx], now))
         if len(tfb) < len(idx):  # pragma: no cover - predict keeps the length
             tfb = np.repeat(tfb[:1], len(idx), axis=0)
         for i in range(len(idx)):

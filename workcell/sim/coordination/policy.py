@@ -8,11 +8,12 @@ and ``"distributed"``, one peer per arm and no coordinator
 mutual exclusion by request/reply in plan order, activations and emergency
 stops broadcast, S2.4 and S2.7's last sentence). A policy is constructed
 with the compiled cell, the plan, the event loop, the link, the trace and
-the arms' ports (:class:`~workcell.sim.protocol.ports.ArmPort`); the
+the control channel (:class:`~workcell.sim.protocol.exchange.ControlChannel`,
+the S2.12 exchange); it knows the arms only from their messages. The
 centralized one talks to the arms through the link (station 0 receives,
 the arms are stations ``1..n``), the distributed one's peers share the
 arms' stations (a policy with ``colocated = True`` gets the controllers'
-messages to station 0 through ``controller_message``); both answer the
+messages to station 0 through the channel's ``local``); both answer the
 harness through :class:`CoordinationPolicy`.
 
 Examples
@@ -34,7 +35,7 @@ from workcell.sim.coordination.centralized import Coordinator
 from workcell.sim.coordination.distributed import DistributedPolicy
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
-from workcell.sim.protocol.ports import ArmPort
+from workcell.sim.protocol.exchange import ArmView, ControlChannel
 from workcell.sim.protocol.states import TaskState
 
 __all__ = ["POLICIES", "CoordinationPolicy", "PolicyFactory", "make_policy", "register_policy"]
@@ -44,7 +45,8 @@ class CoordinationPolicy(Protocol):
     """What the harness needs of a coordination policy."""
 
     p: Problem
-    arms: list[ArmPort]
+    book: list[ArmView]
+    """Per arm, its motion as the policy knows it (the arm's last report)."""
     status: list[TaskState]
     """Per task, its state."""
     cause: list[str]
@@ -83,24 +85,9 @@ class CoordinationPolicy(Protocol):
     def parts_late(self, notices: Sequence[tuple[list[int], float, str]]) -> None:
         """Fault: parts found late at one instant, ``(tasks, arrival, part)`` each."""
 
-    def task_started(self, a: int, t: int, now: float) -> None:
-        """Port: arm ``a`` left task ``t``'s start station."""
-
-    def task_ended(self, a: int, t: int, now: float) -> None:
-        """Port: arm ``a`` ended task ``t``'s trajectory."""
-
-    def check_departure(self, ctl: Any) -> bool:
-        """Port: may the arm set off towards its next station (S2.12)?"""
-
-    def check_way(self, ctl: Any) -> bool:
-        """Port: is the arm's way to its next station free?"""
-
-    def arm_moved(self) -> None:
-        """Port: an arm started or stopped moving."""
-
 
 PolicyFactory = Callable[..., CoordinationPolicy]
-"""``factory(compiled, plan, loop, link, trace, arms, **settings)``."""
+"""``factory(compiled, plan, loop, link, trace, channel, **settings)``."""
 
 POLICIES: dict[str, PolicyFactory] = {
     "centralized": Coordinator,
@@ -129,7 +116,7 @@ def make_policy(
     loop: EventLoop,
     link: Link,
     trace: Trace,
-    arms: Sequence[ArmPort],
+    channel: ControlChannel,
     **settings: Any,
 ) -> CoordinationPolicy:
     """Build the policy registered under ``name``.
@@ -144,4 +131,4 @@ def make_policy(
         raise UsageError(
             f"unknown coordination policy {name!r} (known: {', '.join(sorted(POLICIES))})"
         )
-    return factory(compiled, plan, loop, link, trace, arms, **settings)
+    return factory(compiled, plan, loop, link, trace, channel, **settings)

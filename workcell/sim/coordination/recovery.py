@@ -14,7 +14,16 @@ from typing import Any
 
 from scheduler.reschedule import FrozenTask, reschedule
 from workcell.sim.comms.medium import BROADCAST
-from workcell.sim.protocol.messages import Piece
+from workcell.sim.protocol.exchange import Fail
+from workcell.sim.protocol.messages import (
+    ActivationGo,
+    ActivationStop,
+    ActiveZones,
+    AlarmClear,
+    AlarmStop,
+    Piece,
+    Withdraw,
+)
 from workcell.sim.protocol.states import TaskState
 
 _Self = Any
@@ -29,7 +38,7 @@ def emergency_stop(self: _Self, duration: float) -> None:
     self.trace.add(self.kernel.now, "fault", detail=f"emergency stop for {duration:g} s")
     stop = next(self._stop_ids)
     self.alarms.add(stop)
-    self.net.send(0, BROADCAST, "alarm", ("emergency", stop))
+    self.net.send(0, BROADCAST, "alarm", AlarmStop(stop))
     self.kernel.schedule(duration, self._clear_alarm, stop)
 
 
@@ -40,15 +49,14 @@ def _clear_alarm(self: _Self, stop: int) -> None:
     self.trace.add(self.kernel.now, "fault", detail="emergency stop cleared")
     for a in range(self.p.n_arms):
         if a not in self.failed_arms:
-            self.net.send(0, a + 1, "wake_up", ("alarm_clear", stop))
+            self.net.send(0, a + 1, "wake_up", AlarmClear(stop))
 
 
 def arm_failed(self: _Self, a: int) -> None:
     """Arm ``a`` failed: give back its resources, reassign its tasks."""
     p = self.p
     self.failed_arms.add(a)
-    arm = self.arms[a]
-    arm.fail()
+    self.channel.order(a, Fail())
     self.trace.add(self.kernel.now, "fault", arm=p.arm_names[a], detail="arm failure")
     h = self.dispatch_h[a]
     if h is not None:
@@ -65,14 +73,14 @@ def arm_failed(self: _Self, a: int) -> None:
         if holder == a:
             self.released.add(piece)
             del self.held[piece]
-            if piece[2] >= 0 and self.status[piece[2]] == "running":
+            if piece.task >= 0 and self.status[piece.task] == "running":
                 self.trace.add(
                     self.kernel.now,
                     "zone_leave",
                     arm=p.arm_names[a],
-                    task=p.task_names[piece[2]],
+                    task=p.task_names[piece.task],
                     zone=self._zone_name(piece),
-                    detail=piece[0],
+                    detail=piece.kind,
                 )
     for z in p.arm_start_zones[a]:  # retracted: out of its start zones too
         self.released.add(Piece("zone", int(z), -1 - a, 0.0))
@@ -187,7 +195,7 @@ def activate(self: _Self, zones: tuple[str, ...]) -> None:
             self.activation_acks.add(a)
         else:
             self.activation_slept.add(a)
-            self.net.send(0, a + 1, "sleep", ("activation", self.activation_id))
+            self.net.send(0, a + 1, "sleep", ActivationStop(self.activation_id))
     self._try_activation()
 
 
@@ -207,11 +215,11 @@ def _try_activation(self: _Self) -> None:
     for a in range(self.p.n_arms):
         if a in self.failed_arms:
             continue
-        self.net.send(0, a + 1, "active_zone_grant", ("zones", zones))
+        self.net.send(0, a + 1, "active_zone_grant", ActiveZones(tuple(zones)))
         # every arm told to stop is released, busy or not by now (its task
         # may have ended while the stop was on its way)
         if a in self.activation_slept:
-            self.net.send(0, a + 1, "wake_up", ("activation", self.activation_id))
+            self.net.send(0, a + 1, "wake_up", ActivationGo(self.activation_id))
     self.activation_slept = set()
     for a in range(self.p.n_arms):
         self._dispatch_next(a)
@@ -225,15 +233,15 @@ def _withdraw(self: _Self, t: int) -> None:
         if self.zone_checks and self.zm.waiting(a) is not None:
             self.zm.cancel(a)
         self.zm_wait[a] = None
-    self.pending[a] = [q for q in self.pending[a] if q[2] != t]
+    self.pending[a] = [q for q in self.pending[a] if q.task != t]
     for piece, holder in list(self.held.items()):
-        if holder == a and piece[2] == t:
+        if holder == a and piece.task == t:
             self._release(a, piece)
             self.released.discard(piece)
-    self.told_sleep = {q for q in self.told_sleep if q[2] != t}
+    self.told_sleep = {q for q in self.told_sleep if q.task != t}
     self.task_pieces.pop(t, None)
     self.permitted.discard(t)
-    self.net.send(0, a + 1, "sleep", ("withdraw", -1, t, 0.0))
+    self.net.send(0, a + 1, "sleep", Withdraw(t))
 
 
 def _fail_never(self: _Self) -> None:

@@ -8,18 +8,76 @@ Functions here are methods of :class:`~workcell.sim.coordination.centralized.Coo
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Iterable
+from collections.abc import Set as AbstractSet
+from typing import Any, Self
 
 from multiarm.errors import InternalError, UsageError
 from workcell.sim.comms.medium import Frame
-from workcell.sim.protocol.messages import Piece
+from workcell.sim.protocol.messages import Piece, PositionReport
 from zones.manager import Deadlock, Wake
 
 _Self = Any
 """The :class:`~workcell.sim.coordination.centralized.Coordinator` these functions are methods of (bound in its
 class body; typed loosely here: workcell.sim.coordination.centralized imports this module, never the reverse)."""
 
-__all__: list[str] = []
+__all__ = ["Released"]
+
+
+class Released(set[Piece]):
+    """The set of released resource uses, counting what leaves it.
+
+    ``shrunk`` grows whenever a use is taken out again (an arm failure or a
+    withdrawal hands its task's uses back to the plan), so a cached scan
+    position in a resource's order (``Coordinator._grantable``) is
+    known to be stale.
+    """
+
+    __slots__ = ("shrunk",)
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.shrunk = 0
+
+    def discard(self, piece: object) -> None:
+        self.shrunk += 1
+        super().discard(piece)
+
+    def remove(self, piece: Piece) -> None:
+        self.shrunk += 1
+        super().remove(piece)
+
+    def pop(self) -> Piece:
+        self.shrunk += 1
+        return super().pop()
+
+    def clear(self) -> None:
+        self.shrunk += 1
+        super().clear()
+
+    def difference_update(self, *others: Iterable[Any]) -> None:
+        self.shrunk += 1
+        super().difference_update(*others)
+
+    def intersection_update(self, *others: Iterable[Any]) -> None:
+        self.shrunk += 1
+        super().intersection_update(*others)
+
+    def symmetric_difference_update(self, other: Iterable[Piece]) -> None:
+        self.shrunk += 1
+        super().symmetric_difference_update(other)
+
+    def __isub__(self, other: AbstractSet[object]) -> Self:
+        self.shrunk += 1
+        return super().__isub__(other)
+
+    def __iand__(self, other: AbstractSet[object]) -> Self:
+        self.shrunk += 1
+        return super().__iand__(other)
+
+    def __ixor__(self, other: AbstractSet[Any]) -> Self:  # type: ignore[override, misc]
+        self.shrunk += 1
+        return super().__ixor__(other)
 
 
 def receive(self: _Self, frame: Frame) -> None:
@@ -30,7 +88,7 @@ def receive(self: _Self, frame: Frame) -> None:
     if a in self.failed_arms:
         return
     if kind == "zone_request":
-        t = int(payload[2])
+        t = int(payload.task)
         if t >= 0 and self.status[t] not in ("dispatched", "running"):
             return  # sent before the arm heard the task was withdrawn
         self.pending[a].append(payload)
@@ -39,13 +97,13 @@ def receive(self: _Self, frame: Frame) -> None:
         self._release(a, payload)
         self._serve_all()
     elif kind == "trajectory_end":
-        if isinstance(payload, tuple) and payload[0] == "failed":  # ran, but failed
-            self.task_failed(a, int(payload[1]), str(payload[2]))
-        elif isinstance(payload, tuple):  # a withdrawn trajectory
+        if payload.outcome == "failed":  # ran, but failed
+            self.task_failed(a, payload.task, payload.cause)
+        elif payload.outcome == "withdrawn":  # a withdrawn trajectory
             self.arm_busy[a] = False
             self._dispatch_next(a)
         else:
-            self._task_done(a, int(payload))
+            self._task_done(a, payload.task)
     elif kind == "position":
         self._position(a, payload)
     elif kind == "alarm":
@@ -53,14 +111,14 @@ def receive(self: _Self, frame: Frame) -> None:
             self.kernel.now,
             "fault",
             arm=self.p.arm_names[a],
-            detail=f"coordinator told of a reflex stop ({payload[0]}), after the fact (S1.2)",
+            detail=f"coordinator told of a reflex stop ({payload.cause}), after the fact (S1.2)",
         )
 
 
 def _zone_name(self: _Self, piece: Piece) -> str:
-    if piece[0] == "tool":
-        return str(self.p.tool_names[piece[1]])
-    return str(self.p.zone_names[piece[1]])
+    if piece.kind == "tool":
+        return str(self.p.tool_names[piece.resource])
+    return str(self.p.zone_names[piece.resource])
 
 
 def _serve_all(self: _Self) -> None:
@@ -74,7 +132,7 @@ def _serve(self: _Self, a: int) -> None:
     while self.pending[a] and self.zm_wait[a] is None:
         piece = self.pending[a][0]
         name = self._zone_name(piece)
-        task = self.p.task_names[piece[2]] if piece[2] >= 0 else ""
+        task = self.p.task_names[piece.task] if piece.task >= 0 else ""
         if not self._grantable(piece):
             self._sleep(a, piece, name, task, "planned earlier use not over")
             return
@@ -104,7 +162,7 @@ def _sleep(self: _Self, a: int, piece: Piece, name: str, task: str, why: str) ->
 def _granted(self: _Self, a: int, piece: Piece) -> None:
     self.held[piece] = a
     name = self._zone_name(piece)
-    task = self.p.task_names[piece[2]] if piece[2] >= 0 else ""
+    task = self.p.task_names[piece.task] if piece.task >= 0 else ""
     if piece in self.told_sleep:
         self.trace.add(self.kernel.now, "wake", arm=self.p.arm_names[a], task=task, zone=name)
         self.net.send(0, a + 1, "wake_up", piece)
@@ -115,7 +173,7 @@ def _granted(self: _Self, a: int, piece: Piece) -> None:
             arm=self.p.arm_names[a],
             task=task,
             zone=name,
-            detail=piece[0],
+            detail=piece.kind,
         )
         self.net.send(0, a + 1, "zone_grant", piece)
 
@@ -123,7 +181,7 @@ def _granted(self: _Self, a: int, piece: Piece) -> None:
 def _zm_request(self: _Self, a: int, piece: Piece) -> tuple[bool, tuple[Any, ...]]:
     if not self.zone_checks:
         return True, ()
-    kind, idx = piece[0], piece[1]
+    kind, idx = piece.kind, piece.resource
     zm = self.zm
     if kind == "tool":
         if zm.holder(self.p.tool_names[idx]) == a:
@@ -162,7 +220,7 @@ def _release(self: _Self, a: int, piece: Piece) -> None:
     self.held.pop(piece, None)
     if not self.zone_checks:
         return
-    kind, idx = piece[0], piece[1]
+    kind, idx = piece.kind, piece.resource
     zm = self.zm
     try:
         if zm.waiting(a) is not None:
@@ -180,8 +238,8 @@ def _release(self: _Self, a: int, piece: Piece) -> None:
         raise InternalError(f"zone protocol: {exc}") from None
 
 
-def _position(self: _Self, a: int, payload: Any) -> None:
-    piece, xyz = payload
+def _position(self: _Self, a: int, payload: PositionReport) -> None:
+    piece, xyz = payload.piece, payload.xyz
     if piece is None:
         self.activation_acks.add(a)
         self._try_activation()
@@ -189,7 +247,7 @@ def _position(self: _Self, a: int, payload: Any) -> None:
     zm = self.zm
     if not self.zone_checks:
         return
-    zname = self.p.zone_names[piece[1]]
+    zname = self.p.zone_names[piece.resource]
     if zname not in self.sdl_zones:
         return
     if zm.waiting(a) is None and zm.is_moving(a):

@@ -21,7 +21,7 @@ from types import MappingProxyType
 
 from multiarm.errors import UsageError
 from workcell.sim.control.force import FREE_THRESHOLD, HOLE_SIGMA, check_insertion
-from workcell.sim.protocol.ports import ArmPort
+from workcell.sim.protocol.exchange import ArmView
 
 __all__ = ["CONTROL_TIME", "COORDINATION_POLICIES", "RANGES", "GuardAnswer", "SimOptions"]
 
@@ -34,9 +34,11 @@ COORDINATION_POLICIES: tuple[str, ...] = ("centralized", "distributed")
 centralized coordinator)."""
 
 
-GuardAnswer = Callable[[ArmPort, Sequence[ArmPort]], Sequence[int]]
-"""``answer(mover, arms) -> indices of the arms in mover's way``: a stand-in
-for the coordinator's geometric check (:attr:`SimOptions.guard_answer`)."""
+GuardAnswer = Callable[[ArmView, Sequence[ArmView]], Sequence[int]]
+"""``answer(mover, book) -> indices of the arms in mover's way``: a stand-in
+for the coordinator's geometric check (:attr:`SimOptions.guard_answer`);
+``mover`` is the departure request's view, ``book`` the coordination's
+views of every arm with ``mover`` in its own place."""
 
 
 RANGES: dict[str, tuple[float, float]] = {
@@ -129,8 +131,11 @@ class SimOptions:
         that needs more answers "no detour" (the same seed plans the same
         path on any machine).
     guard_answer : callable, optional
-        ``guard_answer(mover, arms) -> indices of the arms in mover's way``
-        (arms as :class:`~workcell.sim.protocol.ports.ArmPort`), asked in
+        ``guard_answer(mover, book) -> indices of the arms in mover's way``
+        (``mover``: the view the arm sent with its departure request,
+        ``book``: the coordination's last reported view of every arm, the
+        mover in its own place; both
+        :class:`~workcell.sim.protocol.exchange.ArmView`), asked in
         place of the coordinator's geometric check before each motion; only
         with ``geometry_guard``. ``None``: the check decides. An ablation for
         tests that need geometric stops (oscillating, permanent, on one

@@ -404,9 +404,7 @@ def _cause(coord: CoordinationPolicy, t: int, strict: bool = False) -> tuple[str
         return "arm_failed", f"arm {p.arm_names[a]!r} failed and no working arm could take the task"
     if t in coord.dropped:
         return "predecessor", "planned after a task that cannot run"
-    held = {
-        c.index: list(coord.geo_held.get(c.index, [])) for c in coord.arms if c.held_by_geometry()
-    }
+    held = {v.index: list(coord.geo_held.get(v.index, [])) for v in coord.book if v.held}
     if a in held or _cycle(held):
         cycle = _cycle(held)
         names = p.arm_names
@@ -420,7 +418,7 @@ def _cause(coord: CoordinationPolicy, t: int, strict: bool = False) -> tuple[str
         return "deadlock", f"unresolved geometric deadlock (S2.6), wait-for: {waits}"
     # nothing explains it: an arm had work, no stop in force and no event
     # pending -- a stall of the simulator itself
-    ctl = coord.arms[a]
+    ctl = coord.book[a]
     doing = f"task {p.task_names[ctl.leg.task]!r}" if ctl.leg is not None else "no trajectory"
     text = (
         f"stall: arm {p.arm_names[a]!r} stood still with work left ({doing}, task "

@@ -22,6 +22,7 @@ True
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -38,7 +39,7 @@ from workcell.sim.comms.media import make_medium
 from workcell.sim.comms.medium import Medium
 from workcell.sim.control.controller import ArmController, Ticker
 from workcell.sim.control.force import free_thresholds, insert_searches
-from workcell.sim.coordination.policy import POLICIES, CoordinationPolicy, make_policy
+from workcell.sim.coordination.policy import POLICIES, make_policy
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
 from workcell.sim.harness.faults import (
@@ -57,6 +58,7 @@ from workcell.sim.harness.faults import (
 from workcell.sim.harness.monitor_live import LiveMonitor
 from workcell.sim.harness.options import CONTROL_TIME, COORDINATION_POLICIES, SimOptions
 from workcell.sim.harness.result import SimResult, build_result
+from workcell.sim.protocol.exchange import ControlChannel
 
 __all__ = ["CONTROL_TIME", "SimOptions", "SimResult", "check_control_bound", "simulate"]
 
@@ -241,17 +243,10 @@ def simulate(
     rng = np.random.default_rng(seed)
     names = ["coordinator", *p.arm_names]
     net = Link(kernel, med, trace, names, loss, rng)
+    channel = ControlChannel(A)
     # a policy whose peers share the arms' stations (``colocated``) takes a
-    # controller's messages to station 0 from the controller itself
-    policy_box: list[Any] = []
-
-    def local_send(src: int, dst: int, kind: str, payload: Any) -> None:
-        if dst == 0:
-            policy_box[0].controller_message(src, kind, payload)
-        else:  # pragma: no cover - controllers send to station 0 only
-            net.send(src, dst, kind, payload)
-
-    send = local_send if getattr(factory, "colocated", False) else net.send
+    # controller's messages to station 0 at that station (the channel's local)
+    colocated = bool(getattr(factory, "colocated", False))
     period = float(tick) if tick is not None else 1e-3
     ticker = Ticker(kernel, period) if tick is not None else None
     arms: list[ArmController] = []
@@ -261,22 +256,19 @@ def simulate(
             a,
             arm,
             q0,
-            send,
+            _local_send(channel) if colocated else net.send,
+            channel,
             trace,
             period,
             ticker,
             thresholds[arm.name],
             searches=searches,
             names=(p.task_names, p.zone_names, p.tool_names),
+            geometry=options.geometry_guard,
         )
         arms.append(ctl)
 
-        def rx(frame: Any, ctl: ArmController = ctl) -> None:
-            ctl.receive(frame.kind, frame.payload[0])
-
-        net.receivers[a + 1] = rx
-    if ticker is not None:
-        ticker.arms = list(arms)
+        net.receivers[a + 1] = functools.partial(channel.at_station, a)
     coord = make_policy(
         coordination,
         cc,
@@ -284,7 +276,7 @@ def simulate(
         kernel,
         net,
         trace,
-        arms,
+        channel,
         seed=seed,
         resolve_budget=options.resolve_budget,
         resolve_evaluations=resolve_evaluations,
@@ -295,8 +287,6 @@ def simulate(
         detour_checks=options.detour_checks,
         guard_answer=options.guard_answer,
     )
-    policy_box.append(coord)
-    _connect(coord, arms, geometry=options.geometry_guard)
     arm_index = {n: i for i, n in enumerate(p.arm_names)}
     arrivals = cc.cell.taskset.expected_arrivals()
     late: dict[float, list[tuple[list[int], float, str]]] = {}
@@ -373,18 +363,15 @@ def simulate(
     return result
 
 
-def _connect(coord: CoordinationPolicy, arms: Sequence[ArmController], *, geometry: bool) -> None:
-    """The synchronous ports between the coordinator and the controllers
-    (:mod:`workcell.sim.protocol.ports`): the task start and end notices,
-    and S2.12's geometric check before a departure (asked and answered at
-    the same instant). Every other exchange is a frame on the medium."""
-    for arm in arms:
-        arm.on_task_start = coord.task_started
-        arm.on_task_end = coord.task_ended
-        if geometry:
-            arm.guard = coord.check_departure
-            arm.probe = coord.check_way
-            arm.notify = coord.arm_moved
+def _local_send(channel: ControlChannel) -> Callable[[int, int, str, Any], None]:
+    """A controller's ``send`` when its coordination shares its station."""
+
+    def send(src: int, dst: int, kind: str, payload: Any) -> None:
+        if dst != 0:  # pragma: no cover - controllers send to station 0 only
+            raise InternalError(f"simulate: arm station {src} sent {kind!r} to station {dst}")
+        channel.local(src, kind, payload)
+
+    return send
 
 
 def _crash(arm: ArmController, trace: Trace, recovery: float, force: float) -> None:

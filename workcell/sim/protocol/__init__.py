@@ -5,10 +5,12 @@
 * :mod:`.records` -- the motion and task records an arm controller
   publishes (:class:`MotionLog`), the safety monitor's only input;
 * :mod:`.states` -- the protocol participants' states and transition tables;
-* :mod:`.ports` -- :class:`ArmPort`, the coordinator's geometric view of an
-  arm (S2.12).
+* :mod:`.exchange` -- the S2.12 exchange on the :class:`ControlChannel`:
+  motion reports (:class:`ArmView`), departure requests and answers,
+  excursion and failure orders, task start and end notices.
 """
 
+from workcell.sim.protocol.exchange import ArmView, ControlChannel
 from workcell.sim.protocol.messages import LEG_KINDS, PIECE_KINDS, Leg, Mark, Piece, Station
 from workcell.sim.protocol.records import MotionLog, MotionRecord, TaskRecord
 from workcell.sim.protocol.states import (
@@ -29,6 +31,8 @@ __all__ = [
     "PIECE_KINDS",
     "TASK_MACHINE",
     "ArmState",
+    "ArmView",
+    "ControlChannel",
     "Leg",
     "Machine",
     "Mark",

@@ -23,7 +23,24 @@ from typing import Any, NamedTuple
 
 from workcell.arms import JointTrajectory
 
-__all__ = ["LEG_KINDS", "PIECE_KINDS", "Leg", "Mark", "Piece", "Station"]
+__all__ = [
+    "LEG_KINDS",
+    "PIECE_KINDS",
+    "ActivationGo",
+    "ActivationStop",
+    "ActiveZones",
+    "AlarmClear",
+    "AlarmStop",
+    "Leg",
+    "Mark",
+    "Piece",
+    "PositionReport",
+    "StartPermit",
+    "Station",
+    "Trajectory",
+    "TrajectoryEnd",
+    "Withdraw",
+]
 
 PIECE_KINDS: tuple[str, ...] = ("zone", "move", "tool")
 """Kinds of resource use: an exclusive zone's occupancy, movement in a
@@ -147,3 +164,150 @@ class Leg:
     def duration(self) -> float:
         """Seconds."""
         return float(self.trajectory.duration)
+
+
+# ---------------------------------------------------------------- payloads
+# The payloads of the coordination frames other than a Piece (zone and tool
+# requests, grants, sleeps, wake-ups, releases carry a Piece). ``describe()``
+# is the frame's text in the trace; ``frame_task`` the task a coordinator's
+# frame is about (the link drops a frame older than its task's withdrawal).
+
+
+@dataclass(frozen=True, slots=True)
+class Trajectory:
+    """*Trajectory description + start* (S2.7): the legs of one task (travel,
+    then the task) and whether the task may start on arrival."""
+
+    legs: tuple[Leg, ...]
+    permit: bool
+
+    @property
+    def frame_task(self) -> int:
+        """The task."""
+        return self.legs[-1].task
+
+    def describe(self) -> str:
+        """Trace text (none)."""
+        return ""
+
+
+@dataclass(frozen=True, slots=True)
+class StartPermit:
+    """Wake-up: ``task`` may start (its predecessors are done, its parts came)."""
+
+    task: int
+
+    @property
+    def frame_task(self) -> int:
+        """The task."""
+        return self.task
+
+    def describe(self) -> str:
+        """Trace text."""
+        return f"start -1 task {self.task} at 0"
+
+
+@dataclass(frozen=True, slots=True)
+class Withdraw:
+    """Sleep: drop the not yet started ``task`` (the plan changed)."""
+
+    task: int
+    withdraws = True
+    """The link drops any older frame about the task after this one."""
+
+    @property
+    def frame_task(self) -> int:
+        """The task."""
+        return self.task
+
+    def describe(self) -> str:
+        """Trace text."""
+        return f"withdraw -1 task {self.task} at 0"
+
+
+@dataclass(frozen=True, slots=True)
+class AlarmStop:
+    """Alarm: an emergency stop ``stop`` (by id) in force until its release;
+    from an arm, ``cause="crash"``: it stopped by reflex (S1.2), told after
+    the fact, going on ``recovery`` seconds later."""
+
+    stop: int = 0
+    cause: str = "emergency"
+    recovery: float = 0.0
+
+    def describe(self) -> str:
+        """Trace text."""
+        return self.cause
+
+
+@dataclass(frozen=True, slots=True)
+class AlarmClear:
+    """Wake-up: the emergency stop ``stop`` is released."""
+
+    stop: int
+
+    def describe(self) -> str:
+        """Trace text."""
+        return "alarm_clear"
+
+
+@dataclass(frozen=True, slots=True)
+class ActivationStop:
+    """Sleep: stop for the zone activation ``stop`` (S2.5) and tell where."""
+
+    stop: int
+
+    def describe(self) -> str:
+        """Trace text."""
+        return "activation"
+
+
+@dataclass(frozen=True, slots=True)
+class ActivationGo:
+    """Wake-up: the zone activation ``stop`` is over."""
+
+    stop: int
+
+    def describe(self) -> str:
+        """Trace text."""
+        return "activation"
+
+
+@dataclass(frozen=True, slots=True)
+class ActiveZones:
+    """Active-zone grant (S2.5): the zones active now."""
+
+    zones: tuple[str, ...]
+
+    def describe(self) -> str:
+        """Trace text."""
+        return "zones"
+
+
+@dataclass(frozen=True, slots=True)
+class TrajectoryEnd:
+    """Trajectory end: ``task``'s trajectory is over (``outcome="done"``),
+    it ran but failed with ``cause`` (``"failed"``), or it was withdrawn
+    before it started (``"withdrawn"``)."""
+
+    task: int
+    outcome: str = "done"
+    cause: str = ""
+
+    def describe(self) -> str:
+        """Trace text."""
+        return f"task {self.task}" if self.outcome == "done" else self.outcome
+
+
+@dataclass(frozen=True, slots=True)
+class PositionReport:
+    """Position (S2.7): the arm stopped inside the shared zone of ``piece``
+    with its flange at ``xyz``; ``piece=None``: it stands for a zone
+    activation."""
+
+    piece: Piece | None
+    xyz: tuple[float, float, float]
+
+    def describe(self) -> str:
+        """Trace text (none)."""
+        return ""

@@ -3,8 +3,9 @@
 Before an arm sets off towards its next station, its peer checks that
 motion against the other arms' motion and positions (the
 :class:`~workcell.sim.coordination.guard.GeometryGuard` of the centralized
-coordinator, modelled like it as answered at the same instant through the
-arms' ports): a contact holds the arm at its station. Held arms check again
+coordinator, asked and answered like it on the control channel,
+:mod:`workcell.sim.protocol.exchange`, from the book of the arms' motion
+reports): a contact holds the arm at its station. Held arms check again
 whenever an arm starts or stops. Around arms that stand in the way the peer
 tries an alternative trajectory (an OMPL detour to the next station,
 work-limited and seeded); failing that, when every arm in the way stands
@@ -23,24 +24,20 @@ from typing import Any
 import numpy as np
 
 from workcell.geometry import ObstacleSet, plan_detour
-from workcell.sim.coordination.geometric import check_departure
-from workcell.sim.protocol.ports import ArmPort
+from workcell.sim.coordination.geometric import back_off, blockers, check_departure, on_report
+from workcell.sim.protocol.exchange import BackOffUntil, ComeBack, Detour, ReleaseHold
 
 _Self = Any
 """The :class:`~workcell.sim.coordination.distributed.policy.DistributedPolicy`
 these functions are methods of (typed loosely: that module imports this one)."""
 
-__all__ = ["check_departure"]  # the arm's own check before it sets off: the centralized one
-
-
-def check_way(self: _Self, ctl: ArmPort) -> bool:
-    """Port: is the arm's way to its next station free?"""
-    assert self.guard is not None
-    return not self.guard.blockers(ctl, self.arms)
+# the arm's own check before it sets off, the book and the back-off order:
+# the centralized coordinator's
+__all__ = ["back_off", "blockers", "check_departure", "on_report"]
 
 
 def arm_moved(self: _Self) -> None:
-    """Port: something moved or stopped: the held arms check again (at
+    """Something moved or stopped: the held arms check again (at
     most ``recheck_limit`` passes at one instant, then one guard period
     later, at most ``max_stalled`` times with no task starting or ending)."""
     if self._recheck_h is not None:
@@ -63,31 +60,34 @@ def recheck(self: _Self) -> None:
     waiting for something else (a geometric deadlock, S2.6) has them back
     off to their home joints, and they come back once it has passed."""
     self._recheck_h = None
-    for ctl in self.arms:
+    for a in range(self.p.n_arms):
+        ctl = self.book[a]
         if ctl.failed:
             continue
-        if ctl.away is not None and ctl.leg is None and ctl.away_until is not None:
-            ai, leg_a, _k = ctl.away_until
-            mover = self.arms[ai]
-            passed = mover.leg is not leg_a and mover.away is None
-            waits = mover.stuck() and not mover.held_by_geometry()
+        until = self.away_until.get(a)
+        if ctl.away and ctl.leg is None and until is not None:
+            mover = self.book[until.mover]
+            passed = mover.leg is not until.leg and not mover.away
+            waits = mover.waiting and not mover.held
             if mover.failed or passed or waits:
-                ctl.come_back()
-        if not ctl.held_by_geometry():
+                del self.away_until[a]
+                self.channel.order(a, ComeBack())
+        if not self.book[a].held:
             continue
-        ctl.release_geometry_hold()
-        if ctl.held_by_geometry() and try_detour(self, ctl):
+        self.channel.order(a, ReleaseHold())
+        if self.book[a].held and try_detour(self, a):
             continue
-        blockers = self.geo_held.get(ctl.index, [])
+        ctl = self.book[a]
+        blockers = self.geo_held.get(a, [])
         if (
-            not ctl.held_by_geometry()
+            not ctl.held
             or not blockers
             or self.backoffs >= self.max_backoffs
-            or not all(self.arms[b].stuck() and self.arms[b].away is None for b in blockers)
+            or not all(self.book[b].waiting and not self.book[b].away for b in blockers)
         ):
             continue
         for b in blockers:
-            if self.arms[b].back_off((ctl.index, ctl.leg, ctl.k)):
+            if back_off(self, b, BackOffUntil(a, ctl.leg, ctl.k)):
                 self.backoffs += 1
                 self.detours += 1
                 self.trace.add(
@@ -95,37 +95,39 @@ def recheck(self: _Self) -> None:
                     "detour",
                     arm=self.p.arm_names[b],
                     detail=f"geometric deadlock (S2.6): backs off to its home joints "
-                    f"out of arm {ctl.name!r}'s way",
+                    f"out of arm {self.p.arm_names[a]!r}'s way",
                 )
 
 
-def try_detour(self: _Self, ctl: ArmPort) -> bool:
+def try_detour(self: _Self, a: int) -> bool:
     """S2.12 "continue with alternative trajectory": an OMPL path to the
     next station around the arms standing in the way (tried once per
     station; work-limited, so the same seed plans the same path). There is
     no re-solve under this policy: a detour longer than planned only delays."""
+    ctl = self.book[a]
+    now = self.kernel.now
     leg = ctl.leg
     blockers = self.geo_held.get(ctl.index, [])
     if (
         not self.detours_on
         or leg is None
         or leg.kind != "task"
-        or ctl.away is not None
+        or ctl.away
         or not blockers
-        or any(self.arms[b].running for b in blockers)
+        or any(self.book[b].running for b in blockers)
     ):
         return False
     key = (ctl.index, id(leg), ctl.k)
     if key in self.detour_tried:
         return False
     self.detour_tried.add(key)
-    arm = ctl.arm
-    qa = ctl.position()
+    arm = self.cc.cell.arms[a]
+    qa = ctl.position(now)
     qb = leg.trajectory.sample(np.array([leg.stations[ctl.k].tau]))[0]
     items: list[Any] = []
     for b in blockers:
-        other = self.arms[b]
-        items.extend(ObstacleSet.from_arm(other.arm, other.position()).items)
+        other = self.book[b]
+        items.extend(ObstacleSet.from_arm(self.cc.cell.arms[b], other.position(now)).items)
     res = plan_detour(
         arm,
         qa,
@@ -145,12 +147,12 @@ def try_detour(self: _Self, ctl: ArmPort) -> bool:
     self.trace.add(
         self.kernel.now,
         "detour",
-        arm=ctl.name,
+        arm=self.p.arm_names[a],
         task=self.p.task_names[leg.task],
         delay=extra,
         detail=f"alternative trajectory around arm(s) "
         f"{', '.join(repr(self.p.arm_names[b]) for b in blockers)} (S2.12): "
         f"{extra:+.6g} s",
     )
-    ctl.take_detour(traj, leg.task)
+    self.channel.order(a, Detour(traj, leg.task))
     return True

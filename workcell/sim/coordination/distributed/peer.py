@@ -39,7 +39,17 @@ from typing import TYPE_CHECKING, Any, Protocol
 from workcell.sim.comms.medium import BROADCAST
 from workcell.sim.coordination.distributed.plan import arm_of, build_legs, task_pieces
 from workcell.sim.events.loop import Handle
-from workcell.sim.protocol.messages import Piece
+from workcell.sim.protocol.messages import (
+    ActivationGo,
+    ActivationStop,
+    ActiveZones,
+    AlarmClear,
+    AlarmStop,
+    Piece,
+    StartPermit,
+    Trajectory,
+    Withdraw,
+)
 from workcell.sim.protocol.peers import (
     ACTIVATION_KINDS,
     Activation,
@@ -58,8 +68,8 @@ if TYPE_CHECKING:
     from workcell.sim.comms.link import Link
     from workcell.sim.events.loop import EventLoop
     from workcell.sim.events.trace import Trace
+    from workcell.sim.protocol.exchange import ArmView
     from workcell.sim.protocol.peers import Resource
-    from workcell.sim.protocol.ports import ArmPort
 
 
 class PeerHost(Protocol):
@@ -73,7 +83,7 @@ class PeerHost(Protocol):
     kernel: EventLoop
     link: Link
     trace: Trace
-    arms: list[ArmPort]
+    book: list[ArmView]
     status: list[TaskState]
     cause: list[str]
     cause_kind: list[str]
@@ -190,14 +200,14 @@ class Peer:
             self.dispatch_h = s.kernel.schedule(depart, self.dispatch_next, absolute=True)
             return
         first = any(q not in self.over for q in s.start_pieces[self.a])
-        legs = build_legs(s.cc, s.plan, s.arms[self.a], t, first)
+        legs = build_legs(s.cc, s.plan, s.book[self.a], t, first)
         s.set_status(t, TaskState.DISPATCHED)
         self.prev = t
         permit = self._startable(t)
         if permit:
             self.permitted.add(t)
         self.busy = True
-        self.deliver("trajectory", (legs, permit))
+        self.deliver("trajectory", Trajectory(tuple(legs), permit))
 
     def _startable(self, t: int) -> bool:
         return self.s.kernel.now >= self.release[t] and all(
@@ -210,7 +220,7 @@ class Peer:
         if not self._startable(t):
             return
         self.permitted.add(t)
-        self.deliver("wake_up", ("start", -1, t, 0.0))
+        self.deliver("wake_up", StartPermit(t))
 
     def _on_release(self, t: int) -> None:
         if self.s.kernel.now >= self.release[t]:
@@ -275,7 +285,7 @@ class Peer:
         self.permitted.discard(t)
         self.waiting = [q for q in self.waiting if q.task != t]
         self.told_sleep = {q for q in self.told_sleep if q.task != t}
-        self.deliver("sleep", ("withdraw", -1, t, 0.0))
+        self.deliver("sleep", Withdraw(t))
 
     def part_late(self, t: int, arrival: float, part: str) -> None:
         """Own task ``t``'s part ``part`` comes at ``arrival`` (inf: never)."""
@@ -298,23 +308,23 @@ class Peer:
         """A message from the arm's own controller (no medium between them)."""
         s = self.s
         if kind == "zone_request":
-            t = int(payload[2])
+            t = int(payload.task)
             if t >= 0 and s.status[t] not in (TaskState.DISPATCHED, TaskState.RUNNING):
                 return  # sent before the controller heard of the withdrawal
             self._request(payload)
         elif kind == "zone_release":
             self._over(payload)
         elif kind == "trajectory_end":
-            if isinstance(payload, tuple) and payload[0] == "failed":
-                self.task_failed(int(payload[1]), str(payload[2]), "insertion")
-            elif isinstance(payload, tuple):  # a withdrawn trajectory
+            if payload.outcome == "failed":
+                self.task_failed(payload.task, payload.cause, "insertion")
+            elif payload.outcome == "withdrawn":  # a withdrawn trajectory
                 self.busy = False
-                if s.status[int(payload[1])] == TaskState.DISPATCHED:
-                    s.set_status(int(payload[1]), TaskState.PENDING)
+                if s.status[payload.task] == TaskState.DISPATCHED:
+                    s.set_status(payload.task, TaskState.PENDING)
                 self.dispatch_next()
             else:
-                self.task_done(int(payload))
-        elif kind == "position" and payload[0] is None and self.unacked:
+                self.task_done(payload.task)
+        elif kind == "position" and payload.piece is None and self.unacked:
             act = self.unacked.pop(0)  # the controller stands for this activation
             self._send_activation(
                 act.origin, Activation(act.stop, act.zones, "stopped", act.origin)
@@ -324,7 +334,7 @@ class Peer:
                 s.kernel.now,
                 "fault",
                 arm=s.p.arm_names[self.a],
-                detail=f"peer told of a reflex stop ({payload[0]}), after the fact (S1.2)",
+                detail=f"peer told of a reflex stop ({payload.cause}), after the fact (S1.2)",
             )
         # "position" reports serve the centralized zone manager only
 
@@ -345,9 +355,9 @@ class Peer:
                 self._fail_successors(payload.task, payload.cause)
         elif isinstance(payload, Alarm):
             if payload.on:
-                self.deliver("alarm", ("emergency", payload.stop))
+                self.deliver("alarm", AlarmStop(payload.stop))
             else:
-                self.deliver("wake_up", ("alarm_clear", payload.stop))
+                self.deliver("wake_up", AlarmClear(payload.stop))
         elif isinstance(payload, Activation):
             self._on_activation(b, payload)
         elif isinstance(payload, ArmOut):
@@ -382,7 +392,7 @@ class Peer:
                 self.dispatch_h.cancel()
                 self.dispatch_h = None
             self.unacked.append(act)
-            self.deliver("sleep", ("activation", act.stop))
+            self.deliver("sleep", ActivationStop(act.stop))
         elif act.phase == "stopped":
             if act.stop in self.acks:
                 self.acks[act.stop].add(b)
@@ -391,8 +401,8 @@ class Peer:
             if self.halts.pop(act.stop, None) is None:
                 return
             if act.zones:
-                self.deliver("active_zone_grant", ("zones", act.zones))
-            self.deliver("wake_up", ("activation", act.stop))
+                self.deliver("active_zone_grant", ActiveZones(tuple(act.zones)))
+            self.deliver("wake_up", ActivationGo(act.stop))
             if act.origin == self.a:
                 s.trace.add(
                     s.kernel.now,

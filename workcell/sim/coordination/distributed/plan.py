@@ -13,19 +13,35 @@ from __future__ import annotations
 import bisect
 import itertools
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from scheduler import Problem, Schedule
 from workcell.compile import CompiledCell
+from workcell.sim.protocol.exchange import ArmView
 from workcell.sim.protocol.messages import Leg, Piece, Station
 from workcell.sim.protocol.peers import Resource
-from workcell.sim.protocol.ports import ArmPort
 
-__all__ = ["arm_of", "build_legs", "resource_orders", "task_pieces"]
+__all__ = ["PieceUse", "arm_of", "build_legs", "resource_orders", "task_pieces"]
 
-PieceUse = tuple[Piece, float, float, float]
-"""``(piece, acquire offset, release offset, planned wall time of the acquire)``."""
+
+class PieceUse(NamedTuple):
+    """One use of a resource by a task under a plan (frozen).
+
+    Attributes
+    ----------
+    piece : Piece
+    start, end : float
+        Offsets in the task where it is acquired and given back, seconds.
+    wall : float
+        The plan's time of the acquire, seconds.
+    """
+
+    piece: Piece
+    start: float
+    end: float
+    wall: float
 
 
 def arm_of(p: Problem, plan: Schedule, t: int) -> int:
@@ -48,15 +64,17 @@ def task_pieces(p: Problem, plan: Schedule, t: int) -> list[PieceUse]:
         cw.append(cw[-1] + x)
     out: list[PieceUse] = []
     for r, s, e in sh.exclusive:
-        out.append((Piece("zone", r, t, s), s, e, S + s + cw[bisect.bisect_right(borders, s)]))
+        out.append(
+            PieceUse(Piece("zone", r, t, s), s, e, S + s + cw[bisect.bisect_right(borders, s)])
+        )
     wait_at = dict(zip(borders, wl, strict=True))
     for r, s, e in sh.moves:
         cuts = [b for b in borders if s < b < e and wait_at[b] > 0]
         for p0, p1 in itertools.pairwise([s, *cuts, e]):
             wall = S + p0 + cw[bisect.bisect_right(borders, p0)]
-            out.append((Piece("move", r - Z, t, p0), p0, p1, wall))
+            out.append(PieceUse(Piece("move", r - Z, t, p0), p0, p1, wall))
     for r in sh.tools:
-        out.append((Piece("tool", r - 2 * Z, t, 0.0), 0.0, sh.duration, S))
+        out.append(PieceUse(Piece("tool", r - 2 * Z, t, 0.0), 0.0, sh.duration, S))
     return out
 
 
@@ -75,11 +93,12 @@ def resource_orders(p: Problem, plan: Schedule) -> dict[Resource, list[Piece]]:
 
 
 def build_legs(
-    cc: CompiledCell, plan: Schedule, arm: ArmPort, t: int, first_task: bool
+    cc: CompiledCell, plan: Schedule, arm: ArmView, t: int, first_task: bool
 ) -> list[Leg]:
     """The legs of task ``t`` (travel from where the arm stands, then the
     task), with the plan's times at the start and at every border, and the
-    resource uses at their stations (as the S2.7 trajectory message)."""
+    resource uses at their stations (as the S2.7 trajectory message);
+    ``arm`` is the arm's own view (where it stands)."""
     p = cc.problem
     a = arm.index
     m = int(plan.mode[t])
@@ -101,7 +120,8 @@ def build_legs(
     stations.pop(D, None)
     task_st = [stations[k] for k in sorted(stations)] + [end]
     legs: list[Leg] = []
-    travel = arm.arm.move(arm.q, cm.q_start, arm.arm.interpolation)
+    model = cc.cell.arms[a]
+    travel = model.move(arm.q, cm.q_start, model.interpolation)
     first: list[Piece] = []
     if first_task:  # leaving the start zones
         first = [

@@ -42,7 +42,7 @@ import itertools
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from multiarm.errors import InternalError, UsageError
+from multiarm.errors import InternalError
 from scheduler import Problem, Schedule
 from workcell.compile import CompiledCell
 from workcell.sim.comms.link import Link
@@ -50,12 +50,13 @@ from workcell.sim.comms.medium import BROADCAST, Frame
 from workcell.sim.coordination.distributed import geometry
 from workcell.sim.coordination.distributed.peer import Peer
 from workcell.sim.coordination.distributed.plan import arm_of, resource_orders
+from workcell.sim.coordination.geometric import initial_book
 from workcell.sim.coordination.guard import GeometryGuard
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
+from workcell.sim.protocol.exchange import ArmView, BackOffUntil, ControlChannel, Fail
 from workcell.sim.protocol.messages import Piece
 from workcell.sim.protocol.peers import PEER_RECORDS, Activation, Alarm, Resource
-from workcell.sim.protocol.ports import ArmPort
 from workcell.sim.protocol.states import TASK_MACHINE, TaskState
 
 __all__ = ["DistributedPolicy"]
@@ -88,7 +89,7 @@ class DistributedPolicy:
         kernel: EventLoop,
         net: Link,
         trace: Trace,
-        arms: Sequence[ArmPort],
+        channel: ControlChannel,
         *,
         seed: int = 0,
         resolve_budget: float = 0.015,
@@ -98,7 +99,7 @@ class DistributedPolicy:
         resolving: bool = True,
         detours: bool = True,
         detour_checks: int = 10_000,
-        guard_answer: Callable[[ArmPort, Sequence[ArmPort]], Sequence[int]] | None = None,
+        guard_answer: Callable[[ArmView, Sequence[ArmView]], Sequence[int]] | None = None,
     ) -> None:
         self.cc = compiled
         self.p: Problem = compiled.problem
@@ -106,7 +107,11 @@ class DistributedPolicy:
         self.kernel = kernel
         self.link = net
         self.trace = trace
-        self.arms: list[ArmPort] = list(arms)
+        self.channel = channel
+        self.book: list[ArmView] = initial_book(compiled)
+        """Per arm, the view it last reported (its peer reads its own arm
+        there; the others' are their reports)."""
+        self.away_until: dict[int, BackOffUntil] = {}
         self.seed = seed
         self.resolve_budget = float(resolve_budget)
         self.resolving = False
@@ -154,15 +159,9 @@ class DistributedPolicy:
         self.detour_checks = int(detour_checks)
         self.detours_on = bool(detours)
         """Work limit of one OMPL detour search (validity checks)."""
-        self.peers: list[Peer] = []
-        for a in range(A):
-            ctl_rx = net.receivers.get(a + 1)
-            if ctl_rx is None:
-                raise UsageError(f"distributed coordination: no controller at station {a + 1}")
-            peer = Peer(self, a, self._local(a, ctl_rx))
-            self.peers.append(peer)
-            net.receivers[a + 1] = self._router(a, peer, ctl_rx)
+        self.peers: list[Peer] = [Peer(self, a, self._local(a)) for a in range(A)]
         net.receivers[0] = self._from_controller
+        channel.attach_coordination(self.on_report, self.controller_message, self._at_station)
 
     # ------------------------------------------------------------ plumbing
     def owner(self, piece: Piece) -> int:
@@ -180,26 +179,22 @@ class DistributedPolicy:
         TASK_MACHINE.check(self.status[t], new)
         self.status[t] = new
 
-    def _local(self, a: int, ctl_rx: Any) -> Any:
-        station = a + 1
-
+    def _local(self, a: int) -> Any:
         def deliver(kind: str, payload: Any) -> None:
-            frame = Frame(src=0, dst=station, size=1, kind=kind, payload=(payload, 0))
-            self.kernel.schedule(0.0, ctl_rx, frame)
+            self.kernel.schedule(0.0, self.channel.to_controller, a, kind, payload)
 
         return deliver
 
-    def _router(self, a: int, peer: Peer, ctl_rx: Any) -> Any:
-        def rx(frame: Frame) -> None:
-            payload = frame.payload[0]  # type: ignore[index]
-            if a in self.failed_arms:
-                return  # the arm's station is silent
-            if isinstance(payload, _PEER_TYPES):
-                peer.from_peer(frame.src - 1, frame.kind, payload)
-            else:  # pragma: no cover - nothing else is sent to an arm's station
-                ctl_rx(frame)
-
-        return rx
+    def _at_station(self, a: int, frame: Frame) -> bool:
+        """A frame reached arm ``a``'s station: a peer record is its peer's
+        (a failed arm's station is silent); anything else is the controller's."""
+        payload = frame.payload[0]  # type: ignore[index]
+        if a in self.failed_arms:
+            return True
+        if isinstance(payload, _PEER_TYPES):
+            self.peers[a].from_peer(frame.src - 1, frame.kind, payload)
+            return True
+        return False  # pragma: no cover - nothing else is sent to an arm's station
 
     def _from_controller(self, frame: Frame) -> None:
         """Station 0 has no coordinator: a peer's broadcast reaches it and is
@@ -223,13 +218,13 @@ class DistributedPolicy:
             peer.start()
 
     def task_started(self, a: int, t: int, now: float) -> None:
-        """Port: arm ``a`` left task ``t``'s start station."""
+        """Notice: arm ``a`` left task ``t``'s start station."""
         self.set_status(t, TaskState.RUNNING)
         self.stalled = 0
         self.trace.add(now, "task_start", arm=self.p.arm_names[a], task=self.p.task_names[t])
 
     def task_ended(self, a: int, t: int, now: float) -> None:
-        """Port: arm ``a`` ended task ``t``'s trajectory."""
+        """Notice: arm ``a`` ended task ``t``'s trajectory."""
         self.stalled = 0
         self.trace.add(now, "task_end", arm=self.p.arm_names[a], task=self.p.task_names[t])
 
@@ -238,7 +233,7 @@ class DistributedPolicy:
         if a in self.failed_arms:
             return
         self.failed_arms.add(a)
-        self.arms[a].fail()
+        self.channel.order(a, Fail())
         self.trace.add(self.kernel.now, "fault", arm=self.p.arm_names[a], detail="arm failure")
         self.peers[a].fail()
         self.arm_moved()  # it left its place (retracted home): the held arms look again
@@ -301,8 +296,9 @@ class DistributedPolicy:
                 self.peers[arm_of(self.p, self.plan, t)].part_late(t, arrival, part)
 
     # ------------------------------------------------------------ geometry (S2.12)
+    on_report = geometry.on_report
+    blockers = geometry.blockers
     check_departure = geometry.check_departure
-    check_way = geometry.check_way
     arm_moved = geometry.arm_moved
     _recheck = geometry.recheck
     _try_detour = geometry.try_detour
