@@ -442,3 +442,32 @@ def test_an_ompl_path_missing_the_edge_check_is_no_detour_not_an_error() -> None
     # sampled edge check by less than a sample, and planning raised
     # InternalError. The raw path is tried next, else there is no detour.
     assert centralized("parking", 23, 27) == ()
+
+
+def test_an_arm_failing_during_a_zone_activation_does_not_hold_it_for_good() -> None:
+    # multiarm campaign parking --replay 0:303 (a finding of the published run):
+    # a zone activation, and 1 ns later the failure of an arm told to stop for
+    # it, on CSMA/DCR with re-solving off. The centralized coordinator waited
+    # for the failed arm's stop (S2.5) for good, so the activation never came
+    # and the other arm, stopped for it, stalled. A failed arm now counts as
+    # stopped. The same failure at every planned start and end, either arm:
+    assert centralized("parking", 0, 303) == ()
+    from workcell.sim.harness.faults import ActivateZones
+    from workcell.sim.harness.options import SimOptions
+    from workcell.sim.harness.simulate import simulate
+
+    cc = prepare("parking")
+    for at in cc.times[1:-1]:
+        for arm in cc.arms:
+            for medium, resolve in (("csma-dcr", False), ("serial-bus", True)):
+                faults = FaultPlan([ActivateZones(at, cc.zones), ArmFailure(arm, at + 1e-9)])
+                r = simulate(
+                    cc.compiled,
+                    cc.schedule,
+                    faults=faults,
+                    medium=medium,
+                    options=SimOptions(resolve=resolve),
+                )
+                frame = r.tasks_frame()
+                assert check_tasks(cc, faults, resolve, frame) == (), (at, arm, medium)
+                assert not frame["cause"].astype(str).str.contains("stall").any()
