@@ -471,3 +471,19 @@ def test_an_arm_failing_during_a_zone_activation_does_not_hold_it_for_good() -> 
                 frame = r.tasks_frame()
                 assert check_tasks(cc, faults, resolve, frame) == (), (at, arm, medium)
                 assert not frame["cause"].astype(str).str.contains("stall").any()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="known: a crash's reflex stop leaves the arm where the plan has it gone, "
+    "and no other arm is stopped for it (docs/simulation.md, 'Fault campaigns')",
+)
+@pytest.mark.parametrize("index", [818, 1019])
+def test_an_arm_stopped_by_a_crash_in_the_way_of_another(index: int) -> None:
+    # findings of the published run on parking (seed 0), both with a crash of
+    # 'sb' inside the press zone while 'sa' travels to its next task: under
+    # either policy 'sa' goes on and hits the standing 'sb' (1019: the safety
+    # monitor fires at 5.5 s) or, with the monitor's stop not reached, waits
+    # on a geometric conflict that nothing ends (818: an unresolved deadlock
+    # naming no cycle and a stall)
+    assert replay("parking", 0, index).findings == ()
