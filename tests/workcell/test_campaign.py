@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
-from typing import Any
 
 import pandas as pd
 import pytest
@@ -15,6 +15,7 @@ import pytest
 from multiarm.errors import UsageError, ValidationError
 from workcell.campaign import (
     COLUMNS,
+    COORDINATIONS,
     FAULT_KINDS,
     HAIRS,
     CampaignCell,
@@ -25,9 +26,11 @@ from workcell.campaign import (
     draw_episode,
     parse_replay,
     prepare,
+    replans,
     replay,
     required_tasks,
     run_campaign,
+    run_episode,
 )
 from workcell.cli import main
 from workcell.experiments import parse_sweep
@@ -90,6 +93,9 @@ def test_draws_cover_every_kind_medium_and_hair_and_respect_validity(cell: str) 
     assert seen == expected
     assert {e.medium for e in eps} == set(MEDIA)
     assert {e.resolve for e in eps} == {True, False}
+    assert {e.coordination for e in eps} == set(COORDINATIONS) == {"centralized", "distributed"}
+    # every combination of policy and re-solving is drawn
+    assert len({(e.coordination, e.resolve) for e in eps}) == 4
     assert 0 < sum(e.replay for e in eps) < 40  # about 5 %
     on_edge = 0
     edges = {t + h for t in cc.times for h in HAIRS if t + h >= 0}
@@ -110,6 +116,38 @@ def test_draws_cover_every_kind_medium_and_hair_and_respect_validity(cell: str) 
         # the plan round-trips through the table's JSON
         assert FaultPlan.from_dicts(json.loads(e.faults_json())) == e.faults
     assert on_edge > 50  # fault times exactly on, or a hair off, task starts and ends
+
+
+def test_the_policy_is_drawn_apart_from_everything_else(scara4: CampaignCell) -> None:
+    # restricting the policies changes an episode's policy and nothing else
+    for i in range(40):
+        both = draw_episode(scara4, 5, i)
+        only = draw_episode(scara4, 5, i, coordinations=["centralized"])
+        assert only.coordination == "centralized"
+        assert replace(both, coordination="centralized") == only
+
+
+def test_distributed_episodes_are_judged_as_with_resolving_off(scara4: CampaignCell) -> None:
+    # the distributed policy never re-solves (docs/simulation.md): a failed arm's
+    # planned tasks and their successors may fail even with resolve=True ...
+    ep = draw_episode(scara4, 0, 0)
+    assert replans(replace(ep, coordination="centralized", resolve=True))
+    for coordination, resolve in (
+        ("centralized", False),
+        ("distributed", True),
+        ("distributed", False),
+    ):
+        assert not replans(replace(ep, coordination=coordination, resolve=resolve))
+    arm = scara4.planned_arm[0]
+    faults = FaultPlan([ArmFailure(arm, 0.0)])
+    off = required_tasks(scara4, faults, False)
+    frame = planned_frame(scara4)
+    for t, name in enumerate(scara4.tasks):
+        if not off[t]:
+            frame = fail(frame, name, f"arm '{arm}' failed (arm_out)")
+    assert check_tasks(scara4, faults, False, frame) == ()
+    # ... which re-solving would have been expected to do elsewhere
+    assert "not_done" in kinds(check_tasks(scara4, faults, True, frame))
 
 
 def test_supersigma_draws_lose_sync_on_stepper_axes_only(supersigma: CampaignCell) -> None:
@@ -323,23 +361,25 @@ seeds = [0, 1]
 # ---------------------------------------------------------------- the slice
 
 
-def _slice() -> Any:
-    return run_campaign(SMALL, SLICE, seed=0, workers=2)
+SLICE: dict[str, int] = {"parking": 120, "urdf_cell": 100, "supersigma": 40, "scara4": 40}
+"""Episodes per small cell in the suite's slice: 300 in all, weighted towards
+the cells whose episodes are cheap (parking about 0.06 CPU-s, urdf_cell 0.15,
+supersigma and scara4 0.4), so the slice costs about half a minute on 2 cores
+(one test per cell, each in its own process under ``pytest -n``)."""
 
 
-SLICE = 30
-"""Episodes per small cell in the suite's slice. The issue asks for 300 in the
-suite; at today's 0.5-0.9 CPU-s per episode that is 3-5 minutes on 2 cores,
-over the suite's budget, so the 300-episode run is a documented command
-(``multiarm campaign supersigma scara4 --episodes 150 --seed 0``: 1 finding in
-300 episodes, the known one below)."""
-
-
-def test_a_slice_of_the_campaign_on_the_small_cells_finds_nothing() -> None:
-    outcome = _slice()
-    assert len(outcome.table) == 2 * SLICE
+@pytest.mark.parametrize("cell", list(SLICE))
+def test_a_slice_of_the_campaign_on_the_small_cells_finds_nothing(cell: str) -> None:
+    # seed 11: episodes that no other test or published run uses
+    outcome = run_campaign([cell], SLICE[cell], seed=11, workers=1)
+    table = outcome.table
+    assert len(table) == SLICE[cell]
     assert outcome.errors == ()
     assert outcome.findings == 0, outcome.report(limit=20)
+    # both policies, with re-solving on and off, are in the slice
+    assert set(table["coordination"]) == {"centralized", "distributed"}
+    assert set(table["resolve"]) == {True, False}
+    assert (table["done"] >= 0).all()
 
 
 def test_a_campaign_on_dask_gives_the_local_episodes(tmp_path: Path) -> None:
@@ -372,10 +412,18 @@ FOUND = [
 ]
 
 
+def centralized(cell: str, seed: int, index: int) -> tuple[Finding, ...]:
+    """Episode ``index`` of campaign ``seed`` run under the centralized policy (the
+    one episodes had when these were found; the policy's draw changes nothing else)."""
+    cc = prepare(cell)
+    return run_episode(
+        cc, replace(draw_episode(cc, seed, index), coordination="centralized")
+    ).findings
+
+
 @pytest.mark.parametrize(("cell", "index", "what"), FOUND, ids=[f"{c}-{i}" for c, i, _ in FOUND])
 def test_campaign_findings_replay_clean(cell: str, index: int, what: str) -> None:
-    result = replay(cell, 0, index)
-    assert result.findings == (), what
+    assert centralized(cell, 0, index) == (), what
 
 
 def test_a_part_late_at_its_expected_arrival_holds_back_its_task() -> None:
@@ -384,7 +432,7 @@ def test_a_part_late_at_its_expected_arrival_holds_back_its_task() -> None:
     # place_housing1 went out with its start permitted before the second
     # notice (housing1, arriving at 114.8 s) held it back; over Ethernet the
     # withdrawal came after the start. Both notices now move the releases first.
-    assert replay("scara4", 0, 69).findings == ()
+    assert centralized("scara4", 0, 69) == ()
 
 
 def test_an_ompl_path_missing_the_edge_check_is_no_detour_not_an_error() -> None:
@@ -393,5 +441,49 @@ def test_an_ompl_path_missing_the_edge_check_is_no_detour_not_an_error() -> None
     # detour for 'sa' came back from OMPL with a shortcut that misses the
     # sampled edge check by less than a sample, and planning raised
     # InternalError. The raw path is tried next, else there is no detour.
-    result = replay("parking", 23, 27)
-    assert result.findings == ()
+    assert centralized("parking", 23, 27) == ()
+
+
+def test_an_arm_failing_during_a_zone_activation_does_not_hold_it_for_good() -> None:
+    # multiarm campaign parking --replay 0:303 (a finding of the published run):
+    # a zone activation, and 1 ns later the failure of an arm told to stop for
+    # it, on CSMA/DCR with re-solving off. The centralized coordinator waited
+    # for the failed arm's stop (S2.5) for good, so the activation never came
+    # and the other arm, stopped for it, stalled. A failed arm now counts as
+    # stopped. The same failure at every planned start and end, either arm:
+    assert centralized("parking", 0, 303) == ()
+    from workcell.sim.harness.faults import ActivateZones
+    from workcell.sim.harness.options import SimOptions
+    from workcell.sim.harness.simulate import simulate
+
+    cc = prepare("parking")
+    for at in cc.times[1:-1]:
+        for arm in cc.arms:
+            for medium, resolve in (("csma-dcr", False), ("serial-bus", True)):
+                faults = FaultPlan([ActivateZones(at, cc.zones), ArmFailure(arm, at + 1e-9)])
+                r = simulate(
+                    cc.compiled,
+                    cc.schedule,
+                    faults=faults,
+                    medium=medium,
+                    options=SimOptions(resolve=resolve),
+                )
+                frame = r.tasks_frame()
+                assert check_tasks(cc, faults, resolve, frame) == (), (at, arm, medium)
+                assert not frame["cause"].astype(str).str.contains("stall").any()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="known: a crash's reflex stop leaves the arm where the plan has it gone, "
+    "and no other arm is stopped for it (docs/simulation.md, 'Fault campaigns')",
+)
+@pytest.mark.parametrize("index", [818, 1019])
+def test_an_arm_stopped_by_a_crash_in_the_way_of_another(index: int) -> None:
+    # findings of the published run on parking (seed 0), both with a crash of
+    # 'sb' inside the press zone while 'sa' travels to its next task: under
+    # either policy 'sa' goes on and hits the standing 'sb' (1019: the safety
+    # monitor fires at 5.5 s) or, with the monitor's stop not reached, waits
+    # on a geometric conflict that nothing ends (818: an unresolved deadlock
+    # naming no cycle and a stall)
+    assert replay("parking", 0, index).findings == ()

@@ -3,7 +3,8 @@
 An *episode* is a cell, a seed and an index: from them (and nothing else) it
 draws a fault plan of 1-4 records over every fault kind the simulator knows
 (:mod:`workcell.sim.harness.faults`), a medium (:data:`workcell.sim.comms.MEDIA`),
-a coordination policy and re-solving on or off (:func:`draw_episode`). Fault
+a coordination policy (:data:`COORDINATIONS`) and re-solving on or off
+(:func:`draw_episode`). Fault
 times are uniform over the plan, or exactly at, or a hair
 (:data:`HAIRS`) before or after, a planned task start or end. Each cell is
 compiled once and planned once per process (:func:`prepare`: the tree
@@ -18,7 +19,8 @@ search on a work limit, so the plan is the same on every machine).
   "not completed when the simulation ended", a stall, or a deadlock named
   without its wait-for cycle;
 * ``not_done`` -- a failed task (with a cause) that a surviving arm can do
-  (:func:`required_tasks`);
+  (:func:`required_tasks`; the distributed policy never re-solves, so its
+  episodes are judged as with re-solving off, :func:`replans`);
 * ``release`` -- a done task started before a part gating it arrived (its
   expected arrival plus any delay) or before its release;
 * ``precedence`` -- a done task started before a predecessor ended, or ran
@@ -82,6 +84,7 @@ __all__ = [
     "check_tasks",
     "draw_episode",
     "prepare",
+    "replans",
     "required_tasks",
     "run_episode",
     "simulate_episode",
@@ -98,8 +101,10 @@ FAULT_KINDS: tuple[str, ...] = (
 )
 """Every fault kind the simulator knows (:mod:`workcell.sim.harness.faults`)."""
 
-COORDINATIONS: tuple[str, ...] = ("centralized",)
-"""The coordination policies an episode can draw (S2.7's centralized one)."""
+COORDINATIONS: tuple[str, ...] = ("centralized", "distributed")
+"""The coordination policies an episode can draw: S2.7's central coordinator
+and its last sentence's distributed peers
+(:data:`workcell.sim.harness.options.COORDINATION_POLICIES`)."""
 
 FINDING_KINDS: tuple[str, ...] = (
     "exception",
@@ -301,9 +306,10 @@ class Episode:
         return json.dumps(self.faults.to_dicts())
 
 
-def _generator(cell: str, seed: int, index: int) -> np.random.Generator:
+def _generator(cell: str, seed: int, index: int, stream: int = 0) -> np.random.Generator:
     key = zlib.crc32(Path(cell).name.encode())
-    return np.random.default_rng(np.random.SeedSequence([int(seed), int(index), key]))
+    entropy = [int(seed), int(index), key] + ([stream] if stream else [])
+    return np.random.default_rng(np.random.SeedSequence(entropy))
 
 
 def _time(cc: CampaignCell, rng: np.random.Generator) -> float:
@@ -408,7 +414,10 @@ def draw_episode(
     rng = _generator(cc.name, seed, index)
     replay = bool(rng.random() < REPLAY_SHARE)
     medium = str(media[int(rng.integers(len(media)))])
-    coordination = str(coordinations[int(rng.integers(len(coordinations)))])
+    # the policy from a stream of its own: every other draw of an episode is the
+    # same whichever policies it may draw from
+    pick = _generator(cc.name, seed, index, stream=1)
+    coordination = str(coordinations[int(pick.integers(len(coordinations)))])
     resolve = bool(rng.random() < 0.5)
     sim_seed = int(rng.integers(2**31))
     failed: set[str] = set()
@@ -479,6 +488,18 @@ class Finding:
             raise UsageError(
                 f"Finding.kind: unknown kind {self.kind!r} (known: {', '.join(FINDING_KINDS)})"
             )
+
+
+def replans(episode: Episode) -> bool:
+    """Whether the run of ``episode`` may re-solve after a fault.
+
+    Re-solving on under the centralized coordinator; never under the
+    distributed policy, which keeps the plan whatever ``SimOptions.resolve``
+    says (docs/simulation.md, "Distributed coordination"): there a failed
+    arm's unfinished tasks and the tasks after them fail, as the centralized
+    coordinator fails them with re-solving off.
+    """
+    return episode.resolve and episode.coordination == "centralized"
 
 
 def required_tasks(cc: CampaignCell, faults: FaultPlan, resolve: bool) -> tuple[bool, ...]:
@@ -627,8 +648,9 @@ def check_tasks(
 
 
 def check_result(cc: CampaignCell, episode: Episode, result: SimResult) -> tuple[Finding, ...]:
-    """Every check of a finished run but the replay (:func:`check_tasks`)."""
-    return check_tasks(cc, episode.faults, episode.resolve, result.tasks_frame())
+    """Every check of a finished run but the replay (:func:`check_tasks`, with
+    re-solving as the episode's policy does it, :func:`replans`)."""
+    return check_tasks(cc, episode.faults, replans(episode), result.tasks_frame())
 
 
 @dataclass(frozen=True, slots=True)

@@ -33,7 +33,6 @@ from typing import Any
 
 from multiarm.errors import UsageError
 from workcell.campaign.episodes import (
-    COORDINATIONS,
     EpisodeResult,
     draw_episode,
     prepare,
@@ -93,7 +92,6 @@ def campaign_batch(
     cell: str,
     first: int = 0,
     count: int = BATCH,
-    coordinations: Sequence[str] = COORDINATIONS,
 ) -> list[dict[str, Any]]:
     """Episodes ``first`` to ``first + count - 1`` of campaign ``seed`` on ``cell``.
 
@@ -109,8 +107,6 @@ def campaign_batch(
         A built-in cell's name or a cell file.
     first, count : int
         The episodes of this batch.
-    coordinations : sequence of str
-        The coordination policies episodes draw from.
 
     Returns
     -------
@@ -119,10 +115,7 @@ def campaign_batch(
     if isinstance(count, bool) or not isinstance(count, int) or count < 1:
         raise UsageError(f"campaign: count must be an integer >= 1, got {count!r}")
     cc = prepare(cell)
-    return [
-        run_episode(cc, draw_episode(cc, seed, i, coordinations=tuple(coordinations))).row()
-        for i in range(first, first + count)
-    ]
+    return [run_episode(cc, draw_episode(cc, seed, i)).row() for i in range(first, first + count)]
 
 
 @dataclass(frozen=True, slots=True)
@@ -154,14 +147,14 @@ class CampaignOutcome:
 
     def counts(self, by: str) -> dict[str, int]:
         """Findings (one per episode and kind) counted by ``by``: ``"kind"``,
-        ``"medium"``, ``"fault_kind"``, ``"cell"`` or ``"resolve"``.
+        ``"medium"``, ``"fault_kind"``, ``"cell"``, ``"resolve"`` or ``"coordination"``.
 
         Raises
         ------
         UsageError
             An unknown ``by``.
         """
-        if by not in ("kind", "medium", "fault_kind", "cell", "resolve"):
+        if by not in ("kind", "medium", "fault_kind", "cell", "resolve", "coordination"):
             raise UsageError(f"CampaignOutcome.counts: unknown grouping {by!r}")
         out: dict[str, int] = {}
         for r in self.table.to_dict("records"):

@@ -113,6 +113,11 @@ def arm_failed(self: _Self, a: int) -> None:
             )
     self.resolve(f"arm {p.arm_names[a]!r} failed")
     self._serve_all()
+    if self.activation is not None:
+        # a failed arm never answers a pending activation's stop: it counts as
+        # stopped, else the activation (and every arm it stopped) waits for good
+        self.activation_acks.add(a)
+        self._try_activation()
 
 
 def parts_late(self: _Self, notices: Sequence[tuple[list[int], float, str]]) -> None:
