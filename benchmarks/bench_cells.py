@@ -231,15 +231,23 @@ def references(
       zone-free relaxation and the overlap relaxation of
       :mod:`scheduler.overlap`, each stopped after ``bound_dtime`` of CP-SAT's
       deterministic time or ``bound_time`` seconds, CP-SAT's bound); the overlap relaxation is skipped ("-") with more than 20,000
-      pairs of modes sharing a resource (``cell8``).
+      pairs of modes sharing a resource (``cell8``);
+    * oracle binding: whether the blocking oracle charges any detour at all
+      (:func:`scheduler.exact.oracle_binding`, every question a schedule can
+      raise, "unchecked" beyond 50,000 questions; "no": the problem without
+      the oracle is the true problem).
     """
     from scheduler import lower_bound, solve
+    from scheduler.exact import oracle_binding
     from scheduler.reference import solve_reference
     from workcell import compile_cell
 
     rows = []
     for name in cells:
         p = compile_cell(load_example(name)).problem
+        t_audit = time.perf_counter()
+        binding = oracle_binding(p, max_queries=50_000)
+        t_audit = time.perf_counter() - t_audit
         lb = lower_bound(p)
         tree = solve(p, "tree", time_limit=tree_time, seed=seed)
         cp = solve(p, "cpsat", time_limit=cpsat_time, seed=seed)
@@ -286,6 +294,8 @@ def references(
                 "tasks": p.n_tasks,
                 "zones": p.n_zones,
                 "windows": p.n_windows,
+                "oracle binding": {False: "no", True: "yes", None: "unchecked"}[binding],
+                "oracle check (s)": round(t_audit, 1),
                 "tree (s)": round(tree.objective, 2),
                 "tree busiest arm (s)": round(loads["busiest arm"], 2),
                 "tree waits (s)": round(loads["waits"], 2),
@@ -393,7 +403,11 @@ def main(argv: list[str] | None = None) -> None:
         " the most loaded arm's availability, travel and durations in the tree's plan"
         " (waits and idle time left out); tree waits: the plan's waits at zone"
         " borders; tree busiest resource: the zone, movement or tool the plan occupies"
-        " longest, and for how long (occupied, waits inside its uses included).\n"
+        " longest, and for how long (occupied, waits inside its uses included). oracle"
+        " binding: 'no' when the blocking oracle answers 0 to every question a schedule"
+        " can raise (every mode against every other arm parked at its initial pose or at"
+        " the end pose of any task it can do; scheduler.exact.oracle_binding), so that"
+        " dropping it changes no schedule; oracle check: the wall time of those questions.\n"
     )
     both = pd.concat([speed, sched, refs], ignore_index=True)
     path = publish(

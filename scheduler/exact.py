@@ -19,7 +19,9 @@ the search is complete: every schedule orders each conflicting pair one way
 or the other, and the earliest times of those orders are no later.
 
 Conditions (checked by :func:`applicable`): no blocking oracle (its cost
-depends on which arms are parked, not a difference constraint), no arm
+depends on which arms are parked, not a difference constraint; an oracle
+that charges nothing anywhere can be dropped first, see
+:func:`oracle_binding` and :func:`without_idle_oracle`), no arm
 starting inside an exclusive zone, and setup times that obey the triangle
 inequality (``setup(p, q) <= setup(p, r) + duration(r) + setup(r, q)``,
 true of travel times), so that an arm's pairwise orders imply its sequence.
@@ -29,7 +31,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -37,9 +39,78 @@ import numpy as np
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
 
-__all__ = ["ExactResult", "applicable", "branch_and_bound"]
+__all__ = [
+    "ExactResult",
+    "applicable",
+    "branch_and_bound",
+    "oracle_binding",
+    "without_idle_oracle",
+]
 
 _EPS = 1e-9
+
+
+def oracle_binding(problem: Problem, max_queries: int = 1_000_000) -> bool | None:
+    """Whether the blocking oracle can ever charge a detour (S2.6).
+
+    Asks the oracle every question a schedule can raise: each mode ``m``
+    against each other arm ``b`` parked at its initial pose (``-1``) or at
+    the end pose of any task ``b`` can do. When every answer is 0, no
+    schedule is ever charged a detour nor refused a start, so the problem
+    with the oracle and without it have the same valid schedules with the
+    same makespans: exact methods may drop it (:func:`without_idle_oracle`).
+
+    Parameters
+    ----------
+    problem : Problem
+    max_queries : int
+        Give up (return None) when more questions than this would be asked.
+
+    Returns
+    -------
+    bool or None
+        False: no oracle, or it never charges; True: some answer is
+        positive or infinite; None: not checked (too many questions).
+
+    Examples
+    --------
+    >>> from scheduler.generate import random_problem
+    >>> oracle_binding(random_problem(2, 6, 2, 1, seed=1))
+    False
+    >>> oracle_binding(random_problem(2, 6, 2, 1, seed=1, blocking=True))
+    True
+    """
+    p = problem
+    oracle = p.blocking
+    if oracle is None:
+        return False
+    poses = [[-1, *np.flatnonzero(p.mode_of[b] >= 0).tolist()] for b in range(p.n_arms)]
+    asked = sum(
+        len(poses[b]) for m in range(p.n_modes) for b in range(p.n_arms) if b != p.mode_arm[m]
+    )
+    if asked > max_queries:
+        return None
+    for m in range(p.n_modes):
+        a = int(p.mode_arm[m])
+        for b in range(p.n_arms):
+            if b == a:
+                continue
+            for pose in poses[b]:
+                if float(oracle.cost(m, b, pose)) != 0.0:
+                    return True
+    return False
+
+
+def without_idle_oracle(problem: Problem, max_queries: int = 1_000_000) -> Problem:
+    """The problem without its blocking oracle when that oracle never charges
+    (:func:`oracle_binding` is False); else the problem itself, unchanged.
+
+    Dropping an oracle that answers 0 to every question changes no
+    constraint, so an optimum or a bound of the result is one of ``problem``.
+    """
+    if problem.blocking is not None and oracle_binding(problem, max_queries) is False:
+        return replace(problem, blocking=None)
+    return problem
 
 
 def applicable(problem: Problem, max_tasks: int = 12) -> tuple[bool, str]:
