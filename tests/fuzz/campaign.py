@@ -280,7 +280,12 @@ def _notes(md: Path) -> str:
         return ""
     lines = md.read_text(encoding="utf-8").splitlines()
     rows = [i for i, line in enumerate(lines) if line.startswith("|")]
-    return "\n".join(lines[rows[-1] + 1 :]).strip("\n") if rows else ""
+    if not rows:
+        return ""
+    end = rows[0]  # the end of the first table (the notes may hold tables of their own)
+    while end + 1 < len(lines) and lines[end + 1].startswith("|"):
+        end += 1
+    return "\n".join(lines[end + 1 :]).strip("\n")
 
 
 def _markdown(results: list[FuzzRun], args: argparse.Namespace, notes: str = "") -> str:
