@@ -36,14 +36,16 @@ bench: $(STAMP)
 # The long fuzz campaign of the parsers (tests/fuzz): FUZZ_RUNS inputs per target,
 # at most FUZZ_TIME seconds each, one target after the other (FUZZ_TARGETS: a
 # comma-separated subset); figures to benchmarks/results/fuzz.{json,md} (the rows
-# of targets not run are kept), findings to .fuzz/. The test suite runs a short
+# of targets not run are kept), findings to .fuzz/ and (their inputs) to
+# tests/fuzz/crashes/<target>/, where the tests replay them. The test suite runs a short
 # one, every target in one process (tests/fuzz/test_fuzz.py).
 FUZZ_RUNS ?= 100000
 FUZZ_TIME ?= 3600
 FUZZ_TARGETS ?=
 fuzz: $(STAMP)
 	$(BIN)/python -m tests.fuzz.campaign --runs $(FUZZ_RUNS) --max-time $(FUZZ_TIME) \
-		--targets "$(FUZZ_TARGETS)" --out benchmarks/results/fuzz --merge
+		--targets "$(FUZZ_TARGETS)" --out benchmarks/results/fuzz --merge \
+		--crashes tests/fuzz/crashes
 
 # The documentation site (mkdocs.yml) into site/, warnings as errors.
 docs: $(STAMP)

@@ -323,6 +323,7 @@ class _Race:
         self._solver: Any = None
         self._stopped = False
         self._ready = threading.Event()
+        self._finished = threading.Event()
         self._result: Result | None = None
         self._thread = threading.Thread(
             target=self._run, args=(problem, waits, seed, max(0.05, seconds)), daemon=True
@@ -330,7 +331,11 @@ class _Race:
         self._thread.start()
         # let it build its model before the tree search takes the GIL (the
         # compiled kernel holds it through each call): the solve itself runs without it
-        self._ready.wait(timeout=max(0.05, seconds))
+        try:
+            self._ready.wait(timeout=max(0.05, seconds))
+        except KeyboardInterrupt:  # Ctrl-C before the tree search began: end CP-SAT too
+            self._wait_stopped()
+            raise
 
     def _run(self, problem: Problem, waits: bool, seed: int, seconds: float) -> None:
         from scheduler import result as _result
@@ -355,6 +360,7 @@ class _Race:
             self.error = repr(exc)
         finally:
             self._ready.set()
+            self._finished.set()
 
     def _keep(self, solver: Any) -> None:
         self._solver = solver
@@ -363,16 +369,24 @@ class _Race:
             solver.parameters.max_time_in_seconds = 0.0
 
     def stop(self) -> None:
-        """Ask CP-SAT to stop now."""
+        """Ask CP-SAT to stop now (a request made before its search began is
+        lost by ``stop_search``: the time limit is cut too; see :meth:`result`)."""
         self._stopped = True
         s = self._solver
         if s is not None:
+            s.parameters.max_time_in_seconds = 0.0
             s.stop_search()
+
+    def _wait_stopped(self) -> None:
+        """Stop CP-SAT and wait for its thread to end, asking again until it
+        does (the request may come between the solver's start and its search)."""
+        while not self._finished.is_set():
+            self.stop()
+            self._finished.wait(0.02)
 
     def result(self) -> Result | None:
         """Stop CP-SAT if it still runs, and return its result."""
-        if self._thread.is_alive():
-            self.stop()
+        self._wait_stopped()
         self._thread.join()
         return self._result
 

@@ -217,6 +217,10 @@ def _mode(
         if come is not None:
             segments.append(come)
             t += come.duration
+            # a stepper ends on whole steps, within half a step of ``q0``: the
+            # program goes on from there (starting it at ``q0`` made the
+            # trajectory jump by up to half a wrist step, 0.3 mm of the hand)
+            q = come.q1
     for seg in program.segments:
         offsets.append(t)
         if seg.kind == "dwell":

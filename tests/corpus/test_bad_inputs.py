@@ -9,8 +9,10 @@ already exists where the command would write (a run folder holding a
   refuses),
 * that the message names the file and the field (or the option),
 * that the existing output survives byte for byte,
-* and that nothing was compiled, solved or run: every case fails within
-  seconds, before any long work (:data:`QUICK`).
+* and that nothing was compiled, solved or run: the commands run with their
+  progress on (one line a step when stderr is not a terminal, as here), and
+  the only line printed is the error, so no step (compile, solve, simulate,
+  a sweep's runs) began; and every case fails within seconds (:data:`QUICK`).
 
 The corpus of problem files is ``tests/scheduler/test_corpus.py``, the SDL
 one ``tests/zones/malformed/``.
@@ -119,7 +121,7 @@ def _faults(id: str, text: str, *words: str, name: str = "f.toml") -> Case:
 def _sweep_case(id: str, text: str, *words: str, extra: tuple[str, ...] = ()) -> Case:
     return Case(
         id,
-        ("sweep", "{s.toml}", "--out", "{OUT}", "--no-progress", *extra),
+        ("sweep", "{s.toml}", "--out", "{OUT}", *extra),
         {"s.toml": text},
         1,
         words,
@@ -321,7 +323,27 @@ CASES: list[Case] = [
         "--dask-address",
         extra=("--dask-address", "tcp//host"),
     ),
+    Case(
+        "sweep-out-directory",
+        ("sweep", "{s.toml}", "--out", "{TMP}"),
+        {"s.toml": SWEEP},
+        1,
+        ("--out", "is a directory; give a results file such as"),
+    ),
+    Case(
+        "sweep-out-under-a-file",
+        ("sweep", "{s.toml}", "--out", "{s.toml}/results.parquet"),
+        {"s.toml": SWEEP},
+        1,
+        ("--out", "cannot create the folder of", "s.toml/results.parquet"),
+    ),
     # --------------------------------------------------------- command lines
+    Case(
+        "cli-out-is-a-file",
+        ("simulate", "supersigma", "--out", "{f.txt}"),
+        {"f.txt": "not a folder\n"},
+        words=("--out", "f.txt' is not a directory"),
+    ),
     Case(
         "cli-time-limit-nan",
         ("simulate", "supersigma", "--time-limit", "nan", "--out", "{OUT}"),
@@ -427,6 +449,8 @@ def test_a_bad_input_is_refused_early_by_name_and_spares_existing_outputs(
     for words in case.words:
         assert words in err, (words, err)
     assert "Traceback" not in err
+    if case.status == 1:  # one line, the error: no progress line, so no step began
+        assert len(err.strip().splitlines()) == 1 and err.startswith("error: "), err
     assert kept.read_bytes() == KEEP
     if before is not None:
         assert sorted(p.name for p in out.iterdir()) == before

@@ -4,13 +4,16 @@ Usage::
 
     python -m tests.fuzz.campaign [--runs N] [--max-time S] [--timeout S]
                                   [--seed N] [--targets a,b,...] [--out PREFIX]
+                                  [--artifacts DIR] [--crashes DIR]
 
 Each target (:data:`tests.fuzz.targets.TARGETS`) runs under atheris with its
 seeds (the shipped examples and ``tests/fuzz/corpus/<target>/``) until it has
 executed ``--runs`` inputs or spent ``--max-time`` seconds. A finding (an
 exception outside our family, an error naming no place, a hang longer than
 ``--timeout`` seconds, more than ``--rss-limit`` MB) stops that target; its
-input is written to ``--artifacts`` (``.fuzz/`` by default) and shown. With
+input is written to ``--artifacts`` (``.fuzz/`` by default) and shown, and
+with ``--crashes DIR`` also copied to ``DIR/<target>/`` (``make fuzz``:
+``tests/fuzz/crashes``, where the tests replay it). With
 ``--out PREFIX`` the figures go to ``PREFIX.json`` and ``PREFIX.md``.
 ``make fuzz`` runs the long campaign; the test suite runs a short one
 (``tests/fuzz/test_fuzz.py``).
@@ -19,6 +22,7 @@ input is written to ``--artifacts`` (``.fuzz/`` by default) and shown. With
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import re
 import subprocess
@@ -28,7 +32,7 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from tests.fuzz.targets import ALL, ROOT, TARGETS, seed_inputs
+from tests.fuzz.targets import ALL, ALL_ORDER, ROOT, TARGETS, seed_inputs
 
 __all__ = ["FuzzRun", "fuzz_target", "main"]
 
@@ -42,8 +46,9 @@ class FuzzRun:
     target : str
     status : str
         ``"ok"`` (no finding), ``"crash"`` (an exception escaped the target),
-        ``"timeout"`` (a hang), ``"oom"`` or ``"error"`` (the run itself
-        failed; see ``log``).
+        ``"timeout"`` (a hang), ``"oom"``, ``"killed"`` (by a signal from
+        outside, say the kernel's out-of-memory killer) or ``"error"`` (the
+        run itself failed; see ``log``).
     inputs : int
         Inputs executed (libFuzzer's ``number_of_executed_units``).
     seconds : float
@@ -112,6 +117,8 @@ def fuzz_target(
     seed: int = 1,
     rss_limit_mb: int = 2048,
     artifacts: Path | None = None,
+    seeds: list[tuple[str, bytes]] | None = None,
+    crashes: Path | None = None,
 ) -> FuzzRun:
     """Run target ``name`` in a subprocess and return its figures.
 
@@ -133,14 +140,30 @@ def fuzz_target(
     artifacts : Path, optional
         Folder the input of a finding is written to (a temporary one, deleted
         with the rest, when not given).
+    seeds : list of (str, bytes), optional
+        The seed inputs (default: :func:`~tests.fuzz.targets.seed_inputs` of
+        ``name``; required for a ``module:function`` target).
+    crashes : Path, optional
+        Also copy the input of a finding to ``crashes/<target>/`` (the
+        reproducers replayed by the tests, ``tests/fuzz/crashes``), named
+        ``<status>-<first 12 hex digits of its sha1><the target's suffix>``.
+
+    Notes
+    -----
+    The input of a finding is the test unit libFuzzer wrote, else the one the
+    target process wrote itself (``finding input written to``), else, when
+    the process died without either (killed from outside, say by the
+    out-of-memory killer), the input it was running (``<prefix>current``,
+    kept as ``<name>-lost-<sha1>``).
     """
-    with tempfile.TemporaryDirectory(prefix=f"multiarm-fuzz-{name}-") as tmp:
-        work, seeds, corpus = Path(tmp, "work"), Path(tmp, "seeds"), Path(tmp, "corpus")
-        for d in (work, seeds, corpus):
+    short = name.rsplit(":", 1)[-1]  # a module:function target by its function's name
+    with tempfile.TemporaryDirectory(prefix=f"multiarm-fuzz-{short}-") as tmp:
+        work, seed_dir, corpus = Path(tmp, "work"), Path(tmp, "seeds"), Path(tmp, "corpus")
+        for d in (work, seed_dir, corpus):
             d.mkdir()
-        files = seed_inputs(name)
+        files = seed_inputs(name) if seeds is None else seeds
         for i, (label, data) in enumerate(files):
-            (seeds / f"{i:03d}_{label}").write_bytes(data)
+            (seed_dir / f"{i:03d}_{label}").write_bytes(data)
         out = Path(artifacts) if artifacts is not None else Path(tmp, "artifacts")
         out.mkdir(parents=True, exist_ok=True)
         cmd = [
@@ -154,10 +177,10 @@ def fuzz_target(
             f"-timeout={timeout}",
             f"-rss_limit_mb={rss_limit_mb}",
             f"-seed={seed}",
-            f"-artifact_prefix={out}/{name}-",
+            f"-artifact_prefix={out}/{short}-",
             "-print_final_stats=1",
             str(corpus),
-            str(seeds),
+            str(seed_dir),
         ]
         t0 = time.perf_counter()
         proc = subprocess.run(
@@ -170,21 +193,15 @@ def fuzz_target(
             check=False,
         )
         seconds = time.perf_counter() - t0
-    log = proc.stdout + proc.stderr
-    written = re.findall(r"Test unit written to (\S+)", log)
+        log = proc.stdout + proc.stderr
+        status = _status(log, proc.returncode)
+        written = _finding_input(log, Path(f"{out}/{short}-"), status)
+        if written is not None and crashes is not None:
+            written_copy = _keep_reproducer(name, Path(written), status, crashes)
+            print(f"{name}: reproducer kept as {written_copy}", file=sys.stderr, flush=True)
     counts = re.findall(r"multiplex counts: (\{.*\})", log)
-    if "Uncaught Python exception" in log or "fuzz target exited" in log:
-        status = "crash"
-    elif "ALARM: working on the last Unit" in log or "libFuzzer: timeout" in log:
-        status = "timeout"
-    elif "out-of-memory" in log:
-        status = "oom"
-    elif proc.returncode != 0:
-        status = f"error (status {proc.returncode})"
-    else:
-        status = "ok"
     if artifacts is None:
-        written = []
+        written = None
     return FuzzRun(
         target=name,
         status=status,
@@ -195,11 +212,62 @@ def fuzz_target(
         features=_last_int(r"\bft: (\d+)", log),
         corpus=_last_int(r"\bcorp: (\d+)", log),
         seeds=len(files),
-        artifact=written[-1] if written else None,
+        artifact=written,
         log=_excerpt(proc.stdout, proc.stderr),
         per_target=json.loads(counts[-1]) if counts else None,
         distinct=_last_int(r"compile harness: (\d+) distinct cells", log),
     )
+
+
+def _status(log: str, returncode: int) -> str:
+    """The status of a run (:class:`FuzzRun`) from its output and exit status."""
+    if "Uncaught Python exception" in log or "fuzz target exited" in log:
+        return "crash"
+    if "ALARM: working on the last Unit" in log or "libFuzzer: timeout" in log:
+        return "timeout"
+    if "out-of-memory" in log:
+        return "oom"
+    if returncode < 0:
+        return f"killed (signal {-returncode})"
+    if returncode != 0:
+        return f"error (status {returncode})"
+    return "ok"
+
+
+def _finding_input(log: str, prefix: Path, status: str) -> str | None:
+    """The file holding the input of the run's finding (see :func:`fuzz_target`),
+    or None when the run found nothing; removes ``<prefix>current``."""
+    current = Path(f"{prefix}current")
+    units = re.findall(r"Test unit written to (\S+)", log)
+    units += re.findall(r"finding input written to (\S+)", log)
+    units = [u for u in units if Path(u).is_file()]
+    try:
+        if status == "ok":
+            return None
+        if units:
+            return units[0]
+        if current.is_file():
+            data = current.read_bytes()
+            lost = Path(f"{prefix}lost-{hashlib.sha1(data).hexdigest()}")
+            lost.write_bytes(data)
+            return str(lost)
+        return None
+    finally:
+        current.unlink(missing_ok=True)
+
+
+def _keep_reproducer(name: str, unit: Path, status: str, crashes: Path) -> Path:
+    """Copy the input of a finding of target ``name`` to ``crashes/<target>/``."""
+    data = unit.read_bytes()
+    if name == ALL:  # the first byte picked the target
+        name, data = ALL_ORDER[data[0] % len(ALL_ORDER)] if data else ALL_ORDER[0], data[1:]
+    suffix = TARGETS[name].suffix if name in TARGETS else ".bin"
+    kind = status.split()[0]
+    folder = crashes / name.rsplit(":", 1)[-1]
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{kind}-{hashlib.sha1(data).hexdigest()[:12]}{suffix}"
+    path.write_bytes(data)
+    return path
 
 
 _ORDER = {name: i for i, name in enumerate([*TARGETS, ALL])}
@@ -212,7 +280,12 @@ def _notes(md: Path) -> str:
         return ""
     lines = md.read_text(encoding="utf-8").splitlines()
     rows = [i for i, line in enumerate(lines) if line.startswith("|")]
-    return "\n".join(lines[rows[-1] + 1 :]).strip("\n") if rows else ""
+    if not rows:
+        return ""
+    end = rows[0]  # the end of the first table (the notes may hold tables of their own)
+    while end + 1 < len(lines) and lines[end + 1].startswith("|"):
+        end += 1
+    return "\n".join(lines[end + 1 :]).strip("\n")
 
 
 def _markdown(results: list[FuzzRun], args: argparse.Namespace, notes: str = "") -> str:
@@ -253,6 +326,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rss-limit", type=int, default=2048, help="MB per process")
     ap.add_argument("--targets", default="", help="comma-separated (default: all)")
     ap.add_argument("--artifacts", type=Path, default=ROOT / ".fuzz", help="findings go here")
+    ap.add_argument(
+        "--crashes",
+        type=Path,
+        default=None,
+        help="also copy each finding's input to CRASHES/<target>/ (make fuzz: tests/fuzz/crashes)",
+    )
     ap.add_argument("--out", type=Path, default=None, help="write PREFIX.json and PREFIX.md")
     ap.add_argument(
         "--merge",
@@ -280,6 +359,7 @@ def main(argv: list[str] | None = None) -> int:
             seed=args.seed,
             rss_limit_mb=args.rss_limit,
             artifacts=args.artifacts,
+            crashes=args.crashes,
         )
         results.append(r)
         print(

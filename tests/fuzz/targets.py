@@ -47,6 +47,7 @@ __all__ = [
     "Target",
     "Unlocated",
     "check",
+    "compile_cell_data",
     "compile_cells_seen",
     "compile_mutations",
     "compile_tasks_file",
@@ -309,8 +310,22 @@ def compile_cells_seen() -> int:
     return len(_COMPILED)
 
 
-def _compile_target(data: bytes, workdir: Path) -> None:
+def compile_cell_data(
+    mutations: list[tuple[tuple[str, ...], float]], workdir: Path
+) -> tuple[dict[str, Any], Path]:
+    """The ``compile`` harness's cell (the supersigma cell with the 2-task set
+    written into ``workdir``) as the data of a cell file, with ``mutations``
+    (:func:`compile_mutations`) applied; and the folder it is read from."""
     import copy
+
+    base, folder = _compile_base(workdir)
+    cell_data = copy.deepcopy(base)
+    for field, value in mutations:
+        _set(cell_data, field, value)
+    return cell_data, folder
+
+
+def _compile_target(data: bytes, workdir: Path) -> None:
     import sys
 
     from workcell import compile_cell
@@ -320,10 +335,7 @@ def _compile_target(data: bytes, workdir: Path) -> None:
     key = tuple((field, struct.pack("<d", value)) for field, value in mutations)
     if key in _COMPILED:
         return
-    base, folder = _compile_base(workdir)
-    cell_data = copy.deepcopy(base)
-    for field, value in mutations:
-        _set(cell_data, field, value)
+    cell_data, folder = compile_cell_data(mutations, workdir)
     path = workdir / "compile.toml"
 
     def run() -> object:

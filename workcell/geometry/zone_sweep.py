@@ -307,9 +307,14 @@ def _sample(
         t = np.insert(t, bad + 1, mids)
         q = np.insert(q, bad + 1, qm, axis=0)
     else:
+        step = arm.displacement_bound(np.diff(q, axis=0))
+        i = int(np.argmax(step))
+        dq = np.abs(q[i + 1] - q[i])
+        j = int(np.argmax(dq))
         raise ValidationError(
             f"arm {arm.name!r}: trajectory does not get finer under bisection "
-            f"(a joint jumps?) after {_MAX_ROUNDS} rounds"
+            f"after {_MAX_ROUNDS} rounds: it jumps by up to {step[i]:.3g} m (more than the "
+            f"padding {padding:g} m) at t = {t[i]:.9g} s, joint {j} by {dq[j]:.3g}"
         )
     return t, q
 

@@ -328,7 +328,7 @@ def test_the_monitor_fires_on_a_run_that_breaks_the_zone_invariants(supersigma: 
     # (the earliest broken invariant: both arms moving in the shared zone 'fixture')
     with pytest.raises(
         SafetyViolation,
-        match=r"'left' and 'right' both moving in shared zone 'fixture' from t = 53\.8162 s",
+        match=r"'left' and 'right' both moving in shared zone 'fixture' from t = 53\.8159 s",
     ):
         simulate(supersigma, bad, options=SimOptions(zone_protocol=False, geometry_guard=False))
     # the same run with the coordinator's zone checks: safe

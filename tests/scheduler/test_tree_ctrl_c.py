@@ -1,0 +1,77 @@
+"""Ctrl-C during a tree search that races CP-SAT ends CP-SAT too, promptly.
+
+The tree search races CP-SAT (one worker, in a thread) on small problems
+(``TreeOptions.portfolio_max_tasks``). A child Python process solves such a
+problem with a 60 s limit and gets SIGINT at seeded random instants, the
+first ones while the racing thread still builds its model (before the tree
+search starts). Each solve must return the best schedule so far
+(``stats.interrupted``) within seconds, and the CP-SAT thread must have
+ended within seconds too: a Ctrl-C in that first instant used to raise out
+of the race's start, and the thread searched on until its 60 s limit.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+PROMPT = 5.0
+"""Seconds from SIGINT to the end of the solve, and from there to the end of
+the racing thread, at most (the machine may be loaded)."""
+
+CHILD = textwrap.dedent(
+    """
+    import os, random, signal, sys, threading, time
+    from scheduler import solve
+    from scheduler.generate import random_problem
+
+    solve(random_problem(2, 4, 1, 0, seed=0), "tree", time_limit=0.3, seed=0)  # warm up
+    p = random_problem(3, 14, 2, 1, seed=1)
+    rng = random.Random(int(sys.argv[1]))
+    delays = [rng.uniform(0.005, 0.12) for _ in range(7)] + [rng.uniform(0.2, 1.0)]
+    for delay in delays:
+        before = set(threading.enumerate())
+        sent = []
+
+        def kill():
+            sent.append(time.perf_counter())
+            os.kill(os.getpid(), signal.SIGINT)
+
+        timer = threading.Timer(delay, kill)
+        timer.start()
+        r = solve(p, "tree", time_limit=60.0, seed=0)
+        back = time.perf_counter()
+        timer.join()
+        while time.perf_counter() - back < 30.0:
+            left = [t for t in set(threading.enumerate()) - before if t.is_alive()]
+            if not left:
+                break
+            time.sleep(0.02)
+        gone = time.perf_counter() - back
+        print(f"solve {r.stats.interrupted} {back - sent[0]:.3f} {len(left)} {gone:.3f}",
+              flush=True)
+    """
+)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT is POSIX")
+def test_ctrl_c_stops_the_racing_cpsat_thread_promptly() -> None:
+    child = subprocess.run(
+        [sys.executable, "-c", CHILD, "5"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=Path(__file__).resolve().parents[2],
+        check=False,
+    )
+    assert child.returncode == 0, child.stdout + child.stderr
+    rows = [ln.split() for ln in child.stdout.splitlines() if ln.startswith("solve ")]
+    assert len(rows) == 8, child.stdout + child.stderr
+    for _, interrupted, since, left, gone in rows:
+        assert interrupted == "True", child.stdout
+        assert float(since) < PROMPT, child.stdout
+        assert int(left) == 0 and float(gone) < PROMPT, child.stdout
