@@ -65,12 +65,12 @@ from workcell.compile import CompiledCell
 from workcell.sim.comms.link import Link
 from workcell.sim.coordination import geometric, recovery, resources
 from workcell.sim.coordination.constants import CAUSE_KINDS
-from workcell.sim.coordination.distributed.plan import PieceUse, task_pieces
+from workcell.sim.coordination.distributed.plan import PieceUse, build_legs, task_pieces
 from workcell.sim.coordination.guard import GeometryGuard
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
 from workcell.sim.protocol.exchange import ArmView, BackOffUntil, ControlChannel
-from workcell.sim.protocol.messages import Leg, Piece, StartPermit, Station, Trajectory
+from workcell.sim.protocol.messages import Piece, StartPermit, Trajectory
 from workcell.sim.protocol.states import TASK_MACHINE, TaskState
 from zones import ZoneManager
 from zones.manager import ReportOnly
@@ -353,50 +353,9 @@ class Coordinator:
         self._send_trajectory(a, t)
 
     def _send_trajectory(self, a: int, t: int) -> None:
-        p = self.p
-        arm = self.cc.cell.arms[a]
-        m = int(self.plan.mode[t])
-        cm = self.cc.modes[m]
         pieces = self._pieces(t, self.plan)
         self.task_pieces[t] = pieces
-        S = float(self.plan.start[t])
-        sh = p.shapes[m]
-        w = self.plan.waits[t]
-        stations: dict[float, Station] = {0.0: Station(0.0, notbefore=S, start=True)}
-        for j, b in enumerate(sh.borders):
-            stations[b] = Station(b, notbefore=S + b + float(np.sum(w[: j + 1])), border=j)
-        D = float(cm.trajectory.duration)
-        end = Station(D, end=True)
-        for piece, s, e, _wall in pieces:
-            stations.setdefault(s, Station(s)).acquire.append(piece)
-            if e >= D:
-                end.release.append(piece)
-            else:
-                stations.setdefault(e, Station(e)).release.append(piece)
-        stations.pop(D, None)
-        task_st = [stations[k] for k in sorted(stations)] + [end]
-        legs: list[Leg] = []
-        travel = arm.move(self.book[a].q, cm.q_start, arm.interpolation)
-        first: list[Piece] = []
-        if self.prev[a] < 0:  # leaving the start zones
-            first = [
-                Piece("zone", int(z), -1 - a, 0.0)
-                for z in p.arm_start_zones[a]
-                if p.zone_exclusive[z]
-            ]
-        if travel.duration > 0:
-            legs.append(
-                Leg(
-                    "travel",
-                    t,
-                    -1,
-                    travel,
-                    [Station(0.0, release=first), Station(travel.duration, end=True)],
-                )
-            )
-        else:
-            task_st[0].release.extend(first)
-        legs.append(Leg("task", t, m, cm.trajectory, task_st))
+        legs = build_legs(self.cc, self.plan, self.book[a], t, self.prev[a] < 0, pieces)
         self.set_status(t, TaskState.DISPATCHED)
         self.prev[a] = t
         permit = self._startable(t)

@@ -93,12 +93,19 @@ def resource_orders(p: Problem, plan: Schedule) -> dict[Resource, list[Piece]]:
 
 
 def build_legs(
-    cc: CompiledCell, plan: Schedule, arm: ArmView, t: int, first_task: bool
+    cc: CompiledCell,
+    plan: Schedule,
+    arm: ArmView,
+    t: int,
+    first_task: bool,
+    pieces: list[PieceUse] | None = None,
 ) -> list[Leg]:
     """The legs of task ``t`` (travel from where the arm stands, then the
     task), with the plan's times at the start and at every border, and the
     resource uses at their stations (as the S2.7 trajectory message);
-    ``arm`` is the arm's own view (where it stands)."""
+    ``arm`` is the arm's own view (where it stands). Both policies build
+    their trajectory messages with it; ``pieces`` are the task's uses under
+    ``plan`` when the caller has them already (:func:`task_pieces`)."""
     p = cc.problem
     a = arm.index
     m = int(plan.mode[t])
@@ -111,7 +118,7 @@ def build_legs(
         stations[b] = Station(b, notbefore=S + b + float(np.sum(w[: j + 1])), border=j)
     D = float(cm.trajectory.duration)
     end = Station(D, end=True)
-    for piece, s, e, _wall in task_pieces(p, plan, t):
+    for piece, s, e, _wall in task_pieces(p, plan, t) if pieces is None else pieces:
         stations.setdefault(s, Station(s)).acquire.append(piece)
         if e >= D:
             end.release.append(piece)
