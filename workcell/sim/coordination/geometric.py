@@ -50,7 +50,9 @@ def initial_book(compiled: Any) -> list[ArmView]:
 
 def on_report(self: _Self, a: int, report: Report) -> None:
     """A record from arm ``a`` on the control channel: its view goes into
-    the book; a departure request is answered (S2.12); task notices."""
+    the book (an arm stopped off its plan has the moving arms in its way
+    stopped, :func:`stop_movers_for`); a departure request is answered
+    (S2.12); task notices."""
     if isinstance(report, MotionReport):
         before = self.book[a]
         self.book[a] = report.view
