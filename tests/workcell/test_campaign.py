@@ -473,17 +473,73 @@ def test_an_arm_failing_during_a_zone_activation_does_not_hold_it_for_good() -> 
                 assert not frame["cause"].astype(str).str.contains("stall").any()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known: a crash's reflex stop leaves the arm where the plan has it gone, "
-    "and no other arm is stopped for it (docs/simulation.md, 'Fault campaigns')",
-)
 @pytest.mark.parametrize("index", [818, 1019])
 def test_an_arm_stopped_by_a_crash_in_the_way_of_another(index: int) -> None:
     # findings of the published run on parking (seed 0), both with a crash of
     # 'sb' inside the press zone while 'sa' travels to its next task: under
-    # either policy 'sa' goes on and hits the standing 'sb' (1019: the safety
-    # monitor fires at 5.5 s) or, with the monitor's stop not reached, waits
-    # on a geometric conflict that nothing ends (818: an unresolved deadlock
-    # naming no cycle and a stall)
+    # either policy 'sa' went on and hit the standing 'sb' (1019: the safety
+    # monitor fired at 5.5 s) or, with the monitor's stop not reached, waited
+    # on a geometric conflict that nothing ended (818: an unresolved deadlock
+    # naming no cycle and a stall). The geometric check had cleared 'sa'
+    # against 'sb''s planned motion; a reflex stop off the plan now has the
+    # moving arms checked again against where 'sb' stands (S2.12 *stop*).
     assert replay("parking", 0, index).findings == ()
+
+
+@pytest.mark.parametrize("coordination", COORDINATIONS)
+def test_a_crash_stops_the_arm_whose_motion_reaches_the_crashed_one(coordination: str) -> None:
+    # the single crash behind the parking findings: 'sb' stops by reflex at
+    # 5.23 s where the plan has it moving on, and 'sa', already cleared to
+    # move, would reach it (SafetyViolation at 5.5 s before the fix). 'sa' is
+    # told to stop where it is, and asks again once 'sb' has gone on.
+    from workcell.sim.harness.faults import Crash
+    from workcell.sim.harness.simulate import simulate
+
+    cc = prepare("parking")
+    faults = FaultPlan([Crash("sb", 5.23)])
+    r = simulate(cc.compiled, cc.schedule, faults=faults, coordination=coordination)
+    stops = [
+        e
+        for e in r.trace
+        if e.kind == "sleep" and e.arm == "sa" and "stopped in the way off its plan" in e.detail
+    ]
+    assert stops and 5.23 <= stops[0].time < 5.5
+    frame = r.tasks_frame()
+    assert (frame["status"] == "done").all()
+    assert check_tasks(cc, faults, True, frame) == ()
+
+
+@pytest.mark.parametrize("coordination", COORDINATIONS)
+def test_crashes_at_and_next_to_task_boundaries_on_parking_find_nothing(
+    coordination: str,
+) -> None:
+    # a seeded mini-campaign: one crash of either arm exactly at, a hair off
+    # (HAIRS) and a seeded random stretch (up to 0.5 s) off every planned task
+    # start and end, on the ideal medium and a delayed one; every run keeps
+    # the monitor clean, does every task, and passes the campaign's checks
+    import numpy as np
+
+    from workcell.sim.harness.faults import Crash
+    from workcell.sim.harness.options import SimOptions
+    from workcell.sim.harness.simulate import simulate
+
+    cc = prepare("parking")
+    rng = np.random.default_rng(16)
+    for at in cc.times[:-1]:
+        offsets = [*HAIRS, *rng.uniform(-0.5, 0.5, size=2).tolist()]
+        for off in offsets:
+            for arm in cc.arms:
+                medium = "ideal" if rng.random() < 0.5 else "ethernet"
+                faults = FaultPlan([Crash(arm, max(0.0, at + off))])
+                r = simulate(
+                    cc.compiled,
+                    cc.schedule,
+                    faults=faults,
+                    medium=medium,
+                    coordination=coordination,
+                    options=SimOptions(resolve=False),
+                )
+                frame = r.tasks_frame()
+                where = (arm, at + off, medium)
+                assert (frame["status"] == "done").all(), where
+                assert check_tasks(cc, faults, False, frame) == (), where

@@ -94,6 +94,10 @@ def take_order(self: _Self, order: Order) -> None:
                 self._depart()
             else:
                 self.stops.add("geometry")  # S2.12 "stop": released by an order
+        elif not order.go and not self.failed and self.leg is not None:
+            # an unasked *stop*: an arm stopped off its plan stands in the
+            # way of this arm's motion; stop where it is now, released by an order
+            self._pause("geometry")
     elif isinstance(order, ReleaseHold):
         self.release_geometry_hold()
     elif isinstance(order, Detour):

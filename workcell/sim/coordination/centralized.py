@@ -447,6 +447,7 @@ class Coordinator:
     on_report = geometric.on_report
     blockers = geometric.blockers
     check_departure = geometric.check_departure
+    stop_movers_for = geometric.stop_movers_for
     try_detour = geometric.try_detour
     back_off = geometric.back_off
     arm_moved = geometric.arm_moved

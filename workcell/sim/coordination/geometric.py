@@ -37,7 +37,7 @@ _Self = Any
 """The :class:`~workcell.sim.coordination.centralized.Coordinator` these functions are methods of (bound in its
 class body; typed loosely here: workcell.sim.coordination.centralized imports this module, never the reverse)."""
 
-__all__ = ["blockers", "check_departure", "initial_book", "on_report"]
+__all__ = ["blockers", "check_departure", "initial_book", "on_report", "stop_movers_for"]
 
 
 def initial_book(compiled: Any) -> list[ArmView]:
@@ -50,10 +50,15 @@ def initial_book(compiled: Any) -> list[ArmView]:
 
 def on_report(self: _Self, a: int, report: Report) -> None:
     """A record from arm ``a`` on the control channel: its view goes into
-    the book; a departure request is answered (S2.12); task notices."""
+    the book (an arm stopped off its plan has the moving arms in its way
+    stopped, :func:`stop_movers_for`); a departure request is answered
+    (S2.12); task notices."""
     if isinstance(report, MotionReport):
+        before = self.book[a]
         self.book[a] = report.view
         if report.moved and self.guard is not None:
+            if before.running and _stopped_off_plan(report.view):
+                self.stop_movers_for(a)
             self.arm_moved()
     elif isinstance(report, DepartureRequest):
         self.book[a] = report.view
@@ -63,6 +68,40 @@ def on_report(self: _Self, a: int, report: Report) -> None:
         self.task_started(a, report.task, report.time)
     elif isinstance(report, TaskEnded):
         self.task_ended(a, report.task, report.time)
+
+
+def _stopped_off_plan(view: ArmView) -> bool:
+    """The arm stopped between its stations (a reflex stop on a crash, an
+    alarm, a hold): where it stands is not where the plan has it."""
+    return not view.running and view.leg is not None and not view.at_station and not view.failed
+
+
+def stop_movers_for(self: _Self, a: int) -> None:
+    """S2.12 against an arm that stopped off its plan: the arms cleared to
+    move were checked against arm ``a``'s planned motion, not against where
+    it now stands. Each moving arm whose motion to its next station reaches
+    arm ``a`` where it stands is told *stop* (an unasked
+    :class:`~workcell.sim.protocol.exchange.Departure` with ``go=False``);
+    it stands held like an arm stopped before it set off, and is released
+    (it asks again) when the held arms are looked at again after ``a``
+    moves on or gives way."""
+    now = self.kernel.now
+    for b, view in enumerate(self.book):
+        if b == a or not view.running or view.failed or view.leg is None:
+            continue
+        found = self.blockers(view)
+        if a not in found:
+            continue
+        self.geo_held[b] = found
+        self.trace.add(
+            now,
+            "sleep",
+            arm=self.p.arm_names[b],
+            task=self.p.task_names[view.leg.task],
+            detail=f"geometric conflict (S2.12): arm {self.p.arm_names[a]!r} stopped "
+            "in the way off its plan: stop",
+        )
+        self.channel.order(b, Departure(False))
 
 
 def blockers(self: _Self, mover: ArmView) -> list[int]:

@@ -256,7 +256,11 @@ REPORTS: tuple[type, ...] = (MotionReport, DepartureRequest, TaskStarted, TaskEn
 
 @dataclass(frozen=True, slots=True)
 class Departure:
-    """The answer to a :class:`DepartureRequest`: *continue* or *stop*."""
+    """The answer to a :class:`DepartureRequest`: *continue* or *stop*.
+
+    Sent unasked with ``go=False``: *stop* where the arm is now (an arm that
+    stopped off its plan stands in the way of its motion); released by
+    :class:`ReleaseHold`."""
 
     go: bool
 

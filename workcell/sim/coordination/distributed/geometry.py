@@ -24,7 +24,13 @@ from typing import Any
 import numpy as np
 
 from workcell.geometry import ObstacleSet, plan_detour
-from workcell.sim.coordination.geometric import back_off, blockers, check_departure, on_report
+from workcell.sim.coordination.geometric import (
+    back_off,
+    blockers,
+    check_departure,
+    on_report,
+    stop_movers_for,
+)
 from workcell.sim.protocol.exchange import BackOffUntil, ComeBack, Detour, ReleaseHold
 
 _Self = Any
@@ -33,7 +39,7 @@ these functions are methods of (typed loosely: that module imports this one)."""
 
 # the arm's own check before it sets off, the book and the back-off order:
 # the centralized coordinator's
-__all__ = ["back_off", "blockers", "check_departure", "on_report"]
+__all__ = ["back_off", "blockers", "check_departure", "on_report", "stop_movers_for"]
 
 
 def arm_moved(self: _Self) -> None:

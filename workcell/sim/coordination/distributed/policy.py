@@ -299,6 +299,7 @@ class DistributedPolicy:
     on_report = geometry.on_report
     blockers = geometry.blockers
     check_departure = geometry.check_departure
+    stop_movers_for = geometry.stop_movers_for
     arm_moved = geometry.arm_moved
     _recheck = geometry.recheck
     _try_detour = geometry.try_detour
