@@ -328,13 +328,14 @@ class _Race:
         self._thread = threading.Thread(
             target=self._run, args=(problem, waits, seed, max(0.05, seconds)), daemon=True
         )
-        self._thread.start()
-        # let it build its model before the tree search takes the GIL (the
-        # compiled kernel holds it through each call): the solve itself runs without it
         try:
+            self._thread.start()
+            # let it build its model before the tree search takes the GIL (the
+            # compiled kernel holds it through each call): the solve itself runs without it
             self._ready.wait(timeout=max(0.05, seconds))
         except KeyboardInterrupt:  # Ctrl-C before the tree search began: end CP-SAT too
-            self._wait_stopped()
+            if self._thread.ident is not None:  # it started (Ctrl-C may come inside start)
+                self._wait_stopped()
             raise
 
     def _run(self, problem: Problem, waits: bool, seed: int, seconds: float) -> None:
@@ -431,225 +432,248 @@ def solve_tree(
     can_prove, why = exact.applicable(p, opt.exact_max_tasks)
     stats.extra["exact"] = "applicable" if can_prove else why
     race = None
-    if (
-        time_limit is not None
-        and opt.max_evaluations is None
-        and p.n_tasks
-        <= (opt.portfolio_fjsp_max_tasks if pure_fjsp(ev) else opt.portfolio_max_tasks)
-        and (best is None or best.makespan > lb + 1e-9)
-    ):
-        race = _Race(p, waits, seed, deadline - time.perf_counter())
-        ev.stop = race.done
-        can_prove = False  # CP-SAT is the proof here (measured faster than the exact B&B)
-        stats.extra["exact"] = "left to the racing CP-SAT"
-    members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
-    remaining = deadline - time.perf_counter()
-    daemon = multiprocessing.current_process().daemon  # e.g. a Dask worker: no children
-    if daemon and opt.workers > 1:
-        stats.extra["workers"] = "1 (a daemon process may not start worker processes)"
-    if (
-        opt.workers > 1
-        and not daemon
-        and time_limit is not None
-        and opt.max_evaluations is None
-        and not can_prove
-        and race is None
-        and remaining >= opt.parallel_min_time
-        and "fork" in multiprocessing.get_all_start_methods()
-        and (best is None or best.makespan > lb + 1e-9)
-    ):
-        ctx = multiprocessing.get_context("fork")
-        for k in range(1, opt.workers):
-            here, there = ctx.Pipe(duplex=False)
-            proc = ctx.Process(
-                target=_portfolio_member,
-                args=(there, p, waits, seed + 7919 * k, remaining - 0.15, lb),
-                daemon=True,
-            )
-            proc.start()
-            there.close()
-            members.append((proc, here))
-    width = 1
-    rounds = 0
-    work_limit = opt.max_evaluations
-    # a pure FJSP: the compiled graph tabu search keeps all the time left after
-    # the first beam pass, in one run (its restarts and settings go on undisturbed)
-    graph = pure_fjsp(ev)
-
-    def out_of_time() -> bool:
-        return (
-            time.perf_counter() >= deadline
-            or (work_limit is not None and ev.evaluations >= work_limit)
-            or (race is not None and race.done.is_set())
-        )
-
+    # a Ctrl-C anywhere from here on (also between the race's start and the
+    # search's own handler, or while the race is asked to end) ends CP-SAT too
     try:
-        while not out_of_time():
-            if best is not None and best.makespan <= lb + 1e-9:
-                proven = True
-                break
-            if can_prove and (time_limit is None or rounds >= 2):
-                ph = time.perf_counter()
-                nodes = opt.exact_max_nodes
-                if nodes is None and work_limit is not None:
-                    nodes = 100 * work_limit
-                res = exact.branch_and_bound(
-                    p, best.makespan if best else math.inf, deadline, waits, nodes, ev.stop
+        if (
+            time_limit is not None
+            and opt.max_evaluations is None
+            and p.n_tasks
+            <= (opt.portfolio_fjsp_max_tasks if pure_fjsp(ev) else opt.portfolio_max_tasks)
+            and (best is None or best.makespan > lb + 1e-9)
+        ):
+            race = _Race(p, waits, seed, deadline - time.perf_counter())
+            ev.stop = race.done
+            can_prove = False  # CP-SAT is the proof here (measured faster than the exact B&B)
+            stats.extra["exact"] = "left to the racing CP-SAT"
+        members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
+        remaining = deadline - time.perf_counter()
+        daemon = multiprocessing.current_process().daemon  # e.g. a Dask worker: no children
+        if daemon and opt.workers > 1:
+            stats.extra["workers"] = "1 (a daemon process may not start worker processes)"
+        if (
+            opt.workers > 1
+            and not daemon
+            and time_limit is not None
+            and opt.max_evaluations is None
+            and not can_prove
+            and race is None
+            and remaining >= opt.parallel_min_time
+            and "fork" in multiprocessing.get_all_start_methods()
+            and (best is None or best.makespan > lb + 1e-9)
+        ):
+            ctx = multiprocessing.get_context("fork")
+            for k in range(1, opt.workers):
+                here, there = ctx.Pipe(duplex=False)
+                proc = ctx.Process(
+                    target=_portfolio_member,
+                    args=(there, p, waits, seed + 7919 * k, remaining - 0.15, lb),
+                    daemon=True,
                 )
-                stats.nodes += res.nodes
-                stats.pruned += res.pruned
-                stats.phases["exact"] = stats.phases.get("exact", 0.0) + time.perf_counter() - ph
-                if res.schedule is not None:
-                    sched = res.schedule
-                    order = np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64)
-                    sol = ev.evaluate(order, sched.mode.copy())
-                    if sol is not None and sol.makespan <= res.makespan + 1e-9:
-                        offer(sol)
-                    else:  # the decoder cannot reproduce it: keep the exact schedule itself
-                        stats.extra["exact_schedule"] = sched
-                        offer(
-                            Solution(
-                                order, sched.mode.copy(), res.makespan, float(sched.end.sum()), None
-                            )
-                        )
-                if res.complete:
+                proc.start()
+                there.close()
+                members.append((proc, here))
+        width = 1
+        rounds = 0
+        work_limit = opt.max_evaluations
+        # a pure FJSP: the compiled graph tabu search keeps all the time left after
+        # the first beam pass, in one run (its restarts and settings go on undisturbed)
+        graph = pure_fjsp(ev)
+
+        def out_of_time() -> bool:
+            return (
+                time.perf_counter() >= deadline
+                or (work_limit is not None and ev.evaluations >= work_limit)
+                or (race is not None and race.done.is_set())
+            )
+
+        try:
+            while not out_of_time():
+                if best is not None and best.makespan <= lb + 1e-9:
                     proven = True
                     break
-                can_prove = False  # out of budget for the proof: go on with the heuristics
-                continue
-            rounds += 1
-            # a beam pass (widths 1, 2, 4, ...): new starting points
-            if width <= opt.max_width:
-                ph = time.perf_counter()
-                budget = (deadline - ph) * opt.beam_share if math.isfinite(deadline) else math.inf
-                offer(
-                    beam_pass(
-                        ev, width, ph + budget, best.makespan if best else math.inf, rng, stats
+                if can_prove and (time_limit is None or rounds >= 2):
+                    ph = time.perf_counter()
+                    nodes = opt.exact_max_nodes
+                    if nodes is None and work_limit is not None:
+                        nodes = 100 * work_limit
+                    res = exact.branch_and_bound(
+                        p, best.makespan if best else math.inf, deadline, waits, nodes, ev.stop
                     )
-                )
-                stats.phases["beam"] = stats.phases.get("beam", 0.0) + time.perf_counter() - ph
-                width *= 2
-            if best is None:
-                offer(ev.evaluate(priority_order(p, rng=rng, noise=opt.restart_noise)))
-                if best is None:
-                    if rounds >= 3:
-                        break  # list decoding dead-locks here: the exact fallback takes over
+                    stats.nodes += res.nodes
+                    stats.pruned += res.pruned
+                    stats.phases["exact"] = (
+                        stats.phases.get("exact", 0.0) + time.perf_counter() - ph
+                    )
+                    if res.schedule is not None:
+                        sched = res.schedule
+                        order = np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64)
+                        sol = ev.evaluate(order, sched.mode.copy())
+                        if sol is not None and sol.makespan <= res.makespan + 1e-9:
+                            offer(sol)
+                        else:  # the decoder cannot reproduce it: keep the exact schedule itself
+                            stats.extra["exact_schedule"] = sched
+                            offer(
+                                Solution(
+                                    order,
+                                    sched.mode.copy(),
+                                    res.makespan,
+                                    float(sched.end.sum()),
+                                    None,
+                                )
+                            )
+                    if res.complete:
+                        proven = True
+                        break
+                    can_prove = False  # out of budget for the proof: go on with the heuristics
                     continue
-            # improvement: tabu search on arm sequences (list local search with a blocking oracle)
-            ph = time.perf_counter()
-            slice_end = deadline
-            if math.isfinite(deadline) and width <= opt.max_width and not graph:
-                slice_end = ph + (deadline - ph) * opt.improve_share
-            evals = None
-            if work_limit is not None:
-                evals = min(opt.local_evaluations, max(1, work_limit - ev.evaluations))
-            elif not math.isfinite(deadline):
-                evals = opt.local_evaluations
-            if ev.blocking or best.state is None:
-                improved = local_search(
-                    ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
+                rounds += 1
+                # a beam pass (widths 1, 2, 4, ...): new starting points
+                if width <= opt.max_width:
+                    ph = time.perf_counter()
+                    budget = (
+                        (deadline - ph) * opt.beam_share if math.isfinite(deadline) else math.inf
+                    )
+                    offer(
+                        beam_pass(
+                            ev, width, ph + budget, best.makespan if best else math.inf, rng, stats
+                        )
+                    )
+                    stats.phases["beam"] = stats.phases.get("beam", 0.0) + time.perf_counter() - ph
+                    width *= 2
+                if best is None:
+                    offer(ev.evaluate(priority_order(p, rng=rng, noise=opt.restart_noise)))
+                    if best is None:
+                        if rounds >= 3:
+                            break  # list decoding dead-locks here: the exact fallback takes over
+                        continue
+                # improvement: tabu search on arm sequences (list local search with a blocking oracle)
+                ph = time.perf_counter()
+                slice_end = deadline
+                if math.isfinite(deadline) and width <= opt.max_width and not graph:
+                    slice_end = ph + (deadline - ph) * opt.improve_share
+                evals = None
+                if work_limit is not None:
+                    evals = min(opt.local_evaluations, max(1, work_limit - ev.evaluations))
+                elif not math.isfinite(deadline):
+                    evals = opt.local_evaluations
+                if ev.blocking or best.state is None:
+                    improved = local_search(
+                        ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
+                    )
+                else:
+                    improved = tabu_search(
+                        ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
+                    )
+                offer(improved)
+                stats.phases["improve"] = (
+                    stats.phases.get("improve", 0.0) + time.perf_counter() - ph
                 )
-            else:
-                improved = tabu_search(
-                    ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
-                )
-            offer(improved)
-            stats.phases["improve"] = stats.phases.get("improve", 0.0) + time.perf_counter() - ph
-            if (
-                time_limit is None
-                and work_limit is None
-                and not can_prove
-                and width > opt.max_width
-                and rounds > 12
-            ):
-                break  # unlimited budget on a big problem: stop after a fair effort
-    except KeyboardInterrupt:
-        stats.interrupted = True  # Ctrl-C: keep the best schedule found so far
-        if race is not None:
-            race.stop()
-        for member, _pipe in members:
-            member.terminate()
-    stats.evaluations = ev.evaluations
-    for member, pipe in members:
-        if stats.interrupted or (best is not None and best.makespan <= lb + 1e-9):
-            if not stats.interrupted:  # optimal already: nothing the worker finds is better
+                if (
+                    time_limit is None
+                    and work_limit is None
+                    and not can_prove
+                    and width > opt.max_width
+                    and rounds > 12
+                ):
+                    break  # unlimited budget on a big problem: stop after a fair effort
+        except KeyboardInterrupt:
+            stats.interrupted = True  # Ctrl-C: keep the best schedule found so far
+            if race is not None:
+                race.stop()
+            for member, _pipe in members:
                 member.terminate()
+        stats.evaluations = ev.evaluations
+        for member, pipe in members:
+            if stats.interrupted or (best is not None and best.makespan <= lb + 1e-9):
+                if not stats.interrupted:  # optimal already: nothing the worker finds is better
+                    member.terminate()
+                member.join(timeout=1.0)
+                continue
+            got = (
+                pipe.recv() if pipe.poll(max(0.05, deadline - time.perf_counter() + 2.0)) else None
+            )
             member.join(timeout=1.0)
-            continue
-        got = pipe.recv() if pipe.poll(max(0.05, deadline - time.perf_counter() + 2.0)) else None
-        member.join(timeout=1.0)
-        if member.is_alive():  # pragma: no cover - a worker that did not stop in time
-            member.terminate()
-        if (
-            isinstance(got, tuple)
-            and len(got) == 8
-            and (best is None or got[0] < best.makespan - 1e-9)
-        ):
-            from scheduler.schedule import Schedule
+            if member.is_alive():  # pragma: no cover - a worker that did not stop in time
+                member.terminate()
+            if (
+                isinstance(got, tuple)
+                and len(got) == 8
+                and (best is None or got[0] < best.makespan - 1e-9)
+            ):
+                from scheduler.schedule import Schedule
 
-            mk, w_mode, w_start, w_end, w_waits, w_blocking, found, _evals = got
-            stats.extra["worker_schedule"] = Schedule(
-                w_mode, w_start, w_end, tuple(w_waits), w_blocking
+                mk, w_mode, w_start, w_end, w_waits, w_blocking, found, _evals = got
+                stats.extra["worker_schedule"] = Schedule(
+                    w_mode, w_start, w_end, tuple(w_waits), w_blocking
+                )
+                stats.record(found, mk)
+                best = Solution(
+                    np.lexsort((np.arange(p.n_tasks), w_start)).astype(np.int64),
+                    w_mode.copy(),
+                    mk,
+                    float(w_end.sum()),
+                    None,
+                )
+            if isinstance(got, tuple) and len(got) == 8:
+                stats.evaluations += int(got[7])
+            elif isinstance(got, tuple) and got and got[0] == "error":
+                stats.extra["worker_error"] = got[1]
+        if race is not None:
+            cp = race.result()
+            stats.extra["portfolio"] = cp.status.value if cp is not None else "none"
+            if cp is not None:
+                if cp.schedule is not None and (
+                    best is None or cp.objective < best.makespan - 1e-9
+                ):
+                    stats.record(time.perf_counter() - t0, cp.objective)
+                    sched = cp.schedule
+                    stats.extra["exact_schedule"] = sched
+                    best = Solution(
+                        np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64),
+                        sched.mode.copy(),
+                        cp.objective,
+                        float(sched.end.sum()),
+                        None,
+                    )
+                lb = max(lb, cp.bound)
+                if cp.status is SolveStatus.OPTIMAL and best is not None:
+                    proven = best.makespan <= cp.objective + 1e-9
+                elif cp.status is SolveStatus.INFEASIBLE:
+                    proven = True
+        if best is None and not proven and opt.fallback and not stats.interrupted:
+            # no list order decodes (start zones dead-locking): ask CP-SAT within the budget left
+            from scheduler.fallback import exact_fallback
+
+            left = None if time_limit is None else deadline - time.perf_counter()
+            left_evals = None if work_limit is None else max(1, work_limit - stats.evaluations)
+            ph = time.perf_counter()
+            fb = exact_fallback(
+                p, waits=waits, seed=seed, time_limit=left, max_evaluations=left_evals
             )
-            stats.record(found, mk)
-            best = Solution(
-                np.lexsort((np.arange(p.n_tasks), w_start)).astype(np.int64),
-                w_mode.copy(),
-                mk,
-                float(w_end.sum()),
-                None,
-            )
-        if isinstance(got, tuple) and len(got) == 8:
-            stats.evaluations += int(got[7])
-        elif isinstance(got, tuple) and got and got[0] == "error":
-            stats.extra["worker_error"] = got[1]
-    if race is not None:
-        cp = race.result()
-        stats.extra["portfolio"] = cp.status.value if cp is not None else "none"
-        if cp is not None:
-            if cp.schedule is not None and (best is None or cp.objective < best.makespan - 1e-9):
-                stats.record(time.perf_counter() - t0, cp.objective)
-                sched = cp.schedule
+            stats.phases["fallback"] = time.perf_counter() - ph
+            stats.extra["fallback"] = fb.status.value
+            stats.nodes += fb.stats.nodes
+            if fb.schedule is not None:
+                stats.record(time.perf_counter() - t0, fb.objective)
+                sched = fb.schedule
                 stats.extra["exact_schedule"] = sched
                 best = Solution(
                     np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64),
                     sched.mode.copy(),
-                    cp.objective,
+                    fb.objective,
                     float(sched.end.sum()),
                     None,
                 )
-            lb = max(lb, cp.bound)
-            if cp.status is SolveStatus.OPTIMAL and best is not None:
-                proven = best.makespan <= cp.objective + 1e-9
-            elif cp.status is SolveStatus.INFEASIBLE:
+                if fb.status is SolveStatus.OPTIMAL:
+                    proven = True
+            elif fb.status is SolveStatus.INFEASIBLE:
                 proven = True
-    if best is None and not proven and opt.fallback and not stats.interrupted:
-        # no list order decodes (start zones dead-locking): ask CP-SAT within the budget left
-        from scheduler.fallback import exact_fallback
-
-        left = None if time_limit is None else deadline - time.perf_counter()
-        left_evals = None if work_limit is None else max(1, work_limit - stats.evaluations)
-        ph = time.perf_counter()
-        fb = exact_fallback(p, waits=waits, seed=seed, time_limit=left, max_evaluations=left_evals)
-        stats.phases["fallback"] = time.perf_counter() - ph
-        stats.extra["fallback"] = fb.status.value
-        stats.nodes += fb.stats.nodes
-        if fb.schedule is not None:
-            stats.record(time.perf_counter() - t0, fb.objective)
-            sched = fb.schedule
-            stats.extra["exact_schedule"] = sched
-            best = Solution(
-                np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64),
-                sched.mode.copy(),
-                fb.objective,
-                float(sched.end.sum()),
-                None,
-            )
-            if fb.status is SolveStatus.OPTIMAL:
-                proven = True
-        elif fb.status is SolveStatus.INFEASIBLE:
-            proven = True
-    return _finish(p, ev, best, lb, t0, seed, stats, proven)
+        return _finish(p, ev, best, lb, t0, seed, stats, proven)
+    except KeyboardInterrupt:
+        if race is not None:
+            race.result()
+        raise
 
 
 def _finish(
