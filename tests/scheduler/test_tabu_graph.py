@@ -22,8 +22,7 @@ import pytest
 
 from scheduler import Model, parse_fjsp, read_fjsp, solve, validate
 from scheduler.generate import random_problem
-from scheduler.kernel import seq_decode
-from scheduler.kernel._tabu_jit import SearchArrays, all_moves, graph_makespan, tabu_run
+from scheduler.kernel._tabu_jit import SearchArrays, graph_makespan, tabu_run
 from scheduler.search import Evaluator, Solution, priority_order
 from scheduler.tabu import (
     GRAPH_CONFIGS,
@@ -35,6 +34,7 @@ from scheduler.tabu import (
     tabu_search,
 )
 from scheduler.tree import TreeOptions, solve_tree
+from tests.scheduler.tabu_brute import assert_insertions_exact
 
 SHARED = Path(os.environ.get("MULTIARM_SHARED", Path(__file__).resolve().parents[3] / "shared"))
 DATA = SHARED / "data" / "fjsp"
@@ -98,39 +98,7 @@ def test_insertion_makespans_are_exact(seed: int, fast: bool) -> None:
     ev = Evaluator(p)
     sol = _state(ev, seed)
     g, choice, seq, seq_n = _arrays(ev, sol)
-    rows = all_moves(g.arrays, choice, seq, seq_n, fast)
-    got = {(int(r[0]), int(r[1]), int(r[3])): float(r[4]) for r in rows}
-    assert got
-    arm = g.tm_arm[g.tm_ptr[:-1] + choice]
-    brute = {}
-    for v in sorted({k[0] for k in got}):
-        a0 = int(arm[v])
-        rest0 = [int(t) for t in seq[a0, : seq_n[a0]] if t != v]
-        for c in range(int(g.tm_ptr[v + 1] - g.tm_ptr[v])):
-            k = int(g.tm_arm[g.tm_ptr[v] + c])
-            base = rest0 if k == a0 else [int(t) for t in seq[k, : seq_n[k]]]
-            for i in range(len(base) + 1):
-                s2, n2 = seq.copy(), seq_n.copy()
-                s2[a0, :] = -1
-                s2[a0, : len(rest0)] = rest0
-                n2[a0] = len(rest0)
-                new = [*base[:i], v, *base[i:]]
-                s2[k, :] = -1
-                s2[k, : len(new)] = new
-                n2[k] = len(new)
-                if k == a0 and new == [int(t) for t in seq[a0, : seq_n[a0]]]:
-                    continue  # where it is
-                ch2 = choice.copy()
-                ch2[v] = c
-                ok, st, _ = seq_decode(ev.inst, s2, n2, g.modes_of(ch2))
-                mk = g.makespan(ch2, s2, n2)
-                assert ok == (mk >= 0)
-                if ok:
-                    assert float(st.t_end.max()) == pytest.approx(mk)
-                    brute[(v, c, i)] = mk
-    assert set(got) == set(brute)
-    for key, mk in got.items():
-        assert mk == pytest.approx(brute[key]), key
+    assert_insertions_exact(ev, g, choice, seq, seq_n, fast)
 
 
 def _run(fn, ev: Evaluator, sol, cfg: GraphConfig, iters: int):  # type: ignore[no-untyped-def]

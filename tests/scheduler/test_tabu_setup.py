@@ -17,12 +17,11 @@ from hypothesis import strategies as st
 from multiarm.errors import ValidationError
 from scheduler import Model, solve, validate
 from scheduler.generate import generate_problem, metric_closure, random_setup_fjsp
-from scheduler.kernel import seq_decode
-from scheduler.kernel._tabu_jit import all_moves
 from scheduler.search import Evaluator, priority_order
 from scheduler.setup import MatrixSetup
 from scheduler.tabu import _Graph, _sequences, graph_setup, graph_tabu, pure_fjsp
 from scheduler.tree import TreeOptions
+from tests.scheduler.tabu_brute import assert_insertions_exact
 
 
 def _state(ev: Evaluator, seed: int):  # type: ignore[no-untyped-def]
@@ -98,39 +97,7 @@ def test_insertion_makespans_with_setups_are_exact(seed: int, fast: bool) -> Non
     g = _Graph(ev)
     seq, seq_n = _sequences(p, sol.state, np.arange(p.n_tasks))
     choice = g.choice_of(sol.state.t_mode)
-    rows = all_moves(g.arrays, choice, seq, seq_n, fast)
-    got = {(int(r[0]), int(r[1]), int(r[3])): float(r[4]) for r in rows}
-    assert got
-    arm = g.tm_arm[g.tm_ptr[:-1] + choice]
-    brute = {}
-    for v in sorted({k[0] for k in got}):
-        a0 = int(arm[v])
-        rest0 = [int(t) for t in seq[a0, : seq_n[a0]] if t != v]
-        for c in range(int(g.tm_ptr[v + 1] - g.tm_ptr[v])):
-            k = int(g.tm_arm[g.tm_ptr[v] + c])
-            base = rest0 if k == a0 else [int(t) for t in seq[k, : seq_n[k]]]
-            for i in range(len(base) + 1):
-                s2, n2 = seq.copy(), seq_n.copy()
-                s2[a0, :] = -1
-                s2[a0, : len(rest0)] = rest0
-                n2[a0] = len(rest0)
-                new = [*base[:i], v, *base[i:]]
-                s2[k, :] = -1
-                s2[k, : len(new)] = new
-                n2[k] = len(new)
-                if k == a0 and new == [int(t) for t in seq[a0, : seq_n[a0]]]:
-                    continue
-                ch2 = choice.copy()
-                ch2[v] = c
-                ok, st_, _ = seq_decode(ev.inst, s2, n2, g.modes_of(ch2))
-                mk = g.makespan(ch2, s2, n2)
-                assert ok == (mk >= 0)
-                if ok:
-                    assert float(st_.t_end.max()) == pytest.approx(mk)
-                    brute[(v, c, i)] = mk
-    assert set(got) == set(brute)
-    for key, mk in got.items():
-        assert mk == pytest.approx(brute[key]), key
+    assert_insertions_exact(ev, g, choice, seq, seq_n, fast)
 
 
 def test_graph_search_with_setups_improves_and_validates() -> None:
