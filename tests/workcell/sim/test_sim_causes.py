@@ -166,27 +166,30 @@ def test_without_re_solving_a_surviving_arm_is_not_stranded_by_a_failed_arm(
 
 
 def test_a_withdrawal_is_not_overtaken_by_the_retransmitted_trajectory(
-    scara4: Any, scara4_plan: Any, serial_run: Any
+    scara4: Any, scara4_plan: Any
 ) -> None:
     """Trajectories are lost often and retransmitted 2 s later. An arm fails
     just after the other arm's trajectory for the failed arm's successor was
     lost, so the re-solve withdraws that task before the retransmission
-    arrives. The late frame is older than the withdrawal: it is dropped at
-    the receiver (counted, traced) and every task a working arm can do is done."""
+    arrives. The arm's stream is taken in order: the withdrawal, sent
+    later, waits for the retransmitted trajectory and is taken after it, so
+    the arm never runs a withdrawn task, and every task a working arm can
+    do is done."""
     arm, task, other = _handover(scara4, scara4_plan)
-    tf = serial_run.tasks_frame().set_index("task")
-    s, e = float(tf.loc[task, "start"]), float(tf.loc[task, "end"])
     loss = MessageLoss(0.7, kinds=("trajectory",), timeout=2.0)
     lossy = simulate(
         scara4, scara4_plan, medium=SERIAL, seed=0, faults=[loss], options=SimOptions(monitor=False)
     )
+    tf = lossy.tasks_frame().set_index("task")
+    s, e = float(tf.loc[task, "start"]), float(tf.loc[task, "end"])
     lost = [
         ev.time
         for ev in lossy.trace
         if ev.kind == "fault" and ev.message == "trajectory" and ev.arm == other and s < ev.time < e
     ]
     assert lost, "a trajectory to the other arm is lost while the task runs"
-    dropped = 0
+    names = scara4.problem.task_names
+    checked = 0
     for at in lost[:2]:
         r = simulate(
             scara4,
@@ -197,10 +200,30 @@ def test_a_withdrawal_is_not_overtaken_by_the_retransmitted_trajectory(
             options=SimOptions(monitor=False),
         )
         assert _failed(r) == {}, at  # the re-solve gives the failed arm's work to others
-        drops = [ev for ev in r.trace if ev.kind == "drop"]
-        assert len(drops) == r.metrics.stale_frames
-        dropped += r.metrics.stale_frames
-    assert dropped > 0, "a retransmitted trajectory came after its withdrawal"
+        mine = [ev for ev in r.trace if ev.arm == other]
+        for ev in mine:
+            if not (ev.kind == "message" and ev.message == "sleep" and "withdraw" in ev.detail):
+                continue
+            t = names[int(ev.detail.split()[3])]
+            # the withdrawal reached the station while its trajectory was
+            # still being sent again: it waited for it, and was taken after it
+            late = [
+                x.time
+                for x in mine
+                if x.message == "TRAJECTORY" and x.task == t and x.time > ev.time
+            ]
+            if not late:
+                continue
+            ends = [
+                x.time
+                for x in mine
+                if x.message == "trajectory_end" and x.detail == "withdrawn" and x.time >= late[0]
+            ]
+            assert ends, f"the withdrawn {t!r} was never given back"
+            started = [x for x in mine if x.kind == "task_start" and x.task == t]
+            assert not [x for x in started if late[0] <= x.time <= ends[0]]
+            checked += 1
+    assert checked > 0, "a withdrawal waited for its retransmitted trajectory"
 
 
 # ---------------------------------------------------------------- cause 5
@@ -251,6 +274,39 @@ def test_parts_late_at_one_expected_arrival_all_hold_back_their_tasks(
         gated = [t.id for t in ts.tasks if f.part in ts.gating_parts(t.id)]
         assert gated
         assert (tf.loc[gated, "start"] >= 10.0 + f.delay - 1e-9).all(), tf.loc[gated, "start"]
+
+
+@pytest.mark.parametrize("coordination", ["centralized", "distributed"])
+def test_late_part_notices_are_typed_records(cell: Any, plan: Any, coordination: str) -> None:
+    """The feeder's notice is a frozen ``LateNotice`` (the gated tasks, the
+    arrival, the part), read by name by both policies: the trace says what
+    the record says, and the gated tasks wait for the arrival it names."""
+    import dataclasses
+    import math
+
+    from workcell.sim.protocol.messages import LateNotice
+
+    ts = cell.cell.taskset
+    arrivals = ts.expected_arrivals()
+    part = next(x for x, at in sorted(arrivals.items()) if at > 0.0)
+    gated = tuple(i for i, t in enumerate(ts.tasks) if part in ts.gating_parts(t.id))
+    notice = LateNotice(gated, float(arrivals[part]) + 4.0, part)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        notice.arrival = 0.0  # type: ignore[misc]
+    r = simulate(
+        cell,
+        plan,
+        faults=[LatePart(part, 4.0)],
+        coordination=coordination,
+        options=SimOptions(resolve=False),
+    )
+    faults = [e for e in r.trace if e.kind == "fault" and e.detail == notice.describe()]
+    assert len(faults) == 1 and math.isclose(faults[0].time, float(arrivals[part]))
+    tf = r.tasks_frame()
+    starts = tf.set_index("task").loc[[cell.problem.task_names[t] for t in gated], "start"]
+    assert (starts >= notice.arrival - 1e-9).all()
+    never = LateNotice(gated, math.inf, part)
+    assert never.describe() == f"part {part!r} is late: never comes"
 
 
 # ------------------------------------------------- liveness, explained failures

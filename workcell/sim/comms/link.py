@@ -23,7 +23,7 @@ from workcell.sim.comms.medium import MESSAGE_BYTES, Frame, Medium, trajectory_b
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
 
-__all__ = ["Link", "LossModel", "Network"]
+__all__ = ["Link", "LossModel", "Network", "describe_payload"]
 
 _TRAJECTORY_BYTES = trajectory_bytes(5)
 
@@ -186,7 +186,7 @@ class Link:
             station,
             frame.size,
             delay,
-            _describe(payload),
+            describe_payload(payload),
         )
         rx = self.receivers.get(station)
         if rx is not None:
@@ -228,7 +228,8 @@ def _frame_task(kind: str, payload: Any) -> int:
     return -1
 
 
-def _describe(payload: Any) -> str:
+def describe_payload(payload: Any) -> str:
+    """What the trace says of a frame's payload (its ``describe()`` if it has one)."""
     describe = getattr(payload, "describe", None)
     if describe is not None:
         return str(describe())

@@ -75,13 +75,33 @@ MESSAGE_BYTES: dict[str, int] = {
     "wake_up": 28,
     "zone_grant": 30,
     "active_zone_grant": 30,
+    # the S2.12 exchange (workcell.sim.protocol.exchange)
+    "motion_report": 67,
+    "departure_request": 67,
+    "task_started": 37,
+    "task_ended": 37,
+    "departure": 30,
+    "release_hold": 27,
+    "come_back": 27,
+    "fail": 27,
+    "detour": 154,
+    "back_off": 148,
 }
-"""Default frame sizes in bytes of the coordination messages (S2.7, S2.9).
+"""Default frame sizes in bytes of the coordination messages (S2.7, S2.9,
+S2.12).
 
 Position 51 = 1 type byte + 24 bytes (6 DOF x 4) + 26 bytes of Ethernet
 overhead; trajectory 148 = worst case of :func:`trajectory_bytes`. The short
 messages are assumed to be 1 type byte + 1 argument byte (+ 2 for a zone id)
-+ 26 bytes of overhead; the paper gives no size for them."""
++ 26 bytes of overhead; the paper gives no size for them. The S2.12
+exchange: a motion report or departure request 67 = 1 type + 2 leg id + 1
+station + 4 progress + 4 time + 1 flags + 24 joints + 2 acknowledgement (the
+last coordinator frame taken) + 2 request number + 26; a task start or end
+37 = 1 type + 2 task + 4 time + 2 acknowledgement + 2 spare + 26; the
+answer 30 = 1 type + 1 go/stop + 2 request number + 26; release, come back,
+fail 27 = 1 type + 26; a back-off 148 = a trajectory's; a detour 154 = a
+trajectory's + 2 task + 4 rejoin offset. Sequence numbers ride in the
+overhead, as on every frame."""
 
 _ids = itertools.count()
 

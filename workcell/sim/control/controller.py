@@ -57,8 +57,8 @@ from workcell.sim.control.pipeline import (
 )
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
+from workcell.sim.protocol.channel import ControlChannel
 from workcell.sim.protocol.exchange import (
-    ControlChannel,
     DepartureRequest,
     Excursion,
     TaskEnded,
@@ -199,6 +199,7 @@ class ArmController:
         self.channel = channel
         self.geometry = bool(geometry)
         self._asked = False  # a departure request not answered yet
+        self._ask = 0  # the number of the last departure request
         self._sent_key: tuple[Any, ...] | None = None  # what the last motion report said
         channel.attach_arm(index, self.take_order, self.receive)
         if ticker is not None:
@@ -280,8 +281,9 @@ class ArmController:
             return
         if self.geometry:  # S2.12: ask; the answer (an order) sets off or holds
             self._asked = True
-            self._sent_key = None  # the request carries a view: report the next one
-            self.channel.report(self.index, DepartureRequest(self.view()))
+            self._ask += 1
+            self._sent_key = self._view_key()  # the request carries the view
+            self.channel.report(self.index, DepartureRequest(self.view(), self._ask))
             return
         self._depart()
 
@@ -290,7 +292,12 @@ class ArmController:
         self._close_segment()
         self.running = True
         self.t_ref = self.kernel.now
-        self._report(True)
+        if self.geometry:
+            # cleared: the coordination holds the whole motion reserved
+            # until a later report (its arrival) acknowledges the answer
+            self._sent_key = self._view_key()
+        else:
+            self._report(True)
         if self.ticker is not None:
             self._chunk_i = len(self._chunk)  # recompute the pipeline's points
             self.ticker.wake()
@@ -333,8 +340,10 @@ class ArmController:
         self._close_segment()
         self.tau = st.tau
         self.running = False
-        self._report(True)
         self.t_ref = self.kernel.now
+        # reported at the end of this step (_event), unless a departure
+        # request carries the view first
+        self._sent_key = None
         for piece in st.release:
             self.granted.discard(piece)
             self._zone_event("zone_leave", piece, leg.task)
@@ -483,6 +492,9 @@ class ArmController:
         else:
             self.busy = False
             self._seg_t0 = now
+            # where it stands goes first (its stream is in order): the
+            # coordination builds the next trajectory from there
+            self._report()
             if leg.kind == "task":
                 cause = self._search_failure(leg)
                 if cause is None:
@@ -528,6 +540,7 @@ class ArmController:
     # the S2.12 exchange and excursions
     view = excursions.view
     _report = excursions._report
+    _view_key = excursions._view_key
     _event = excursions._event
     take_order = excursions.take_order
     back_off = excursions.back_off

@@ -59,7 +59,16 @@ def view(self: _Self) -> ArmView:
 def _report(self: _Self, moved: bool = False) -> None:
     """Report the view if it changed since the last report (``moved``:
     the arm started or stopped moving, reported in any case)."""
-    key = (
+    key = self._view_key()
+    if not moved and key == self._sent_key:
+        return
+    self._sent_key = key
+    self.channel.report(self.index, MotionReport(self.view(), moved))
+
+
+def _view_key(self: _Self) -> tuple[Any, ...]:
+    """What a report says, to tell whether the view changed since the last one."""
+    return (
         id(self.leg),
         self.k,
         self.tau,
@@ -73,10 +82,6 @@ def _report(self: _Self, moved: bool = False) -> None:
         self.pushing,
         self.failed,
     )
-    if not moved and key == self._sent_key:
-        return
-    self._sent_key = key
-    self.channel.report(self.index, MotionReport(self.view(), moved))
 
 
 def _event(self: _Self, callback: Callable[..., object], *args: Any) -> None:
@@ -88,16 +93,18 @@ def _event(self: _Self, callback: Callable[..., object], *args: Any) -> None:
 def take_order(self: _Self, order: Order) -> None:
     """An answer or an order of the coordination (S2.12, S2.6)."""
     if isinstance(order, Departure):
-        if self._asked:
+        if self._asked and order.ask == self._ask:
             self._asked = False
-            if order.go:
-                self._depart()
-            else:
+            if not order.go:
                 self.stops.add("geometry")  # S2.12 "stop": released by an order
-        elif not order.go and not self.failed and self.leg is not None:
-            # an unasked *stop*: an arm stopped off its plan stands in the
-            # way of this arm's motion; stop where it is now, released by an order
-            self._pause("geometry")
+            elif not (self.stops or self.failed or self.leg is None or self.running):
+                self._depart()  # reported: the report acknowledges the answer
+                return
+            # else a stop came since it asked: it stands, and asks again
+            # when the stop is over
+        # report in any case: the report acknowledges the answer, so the
+        # coordination learns that the arm did not set off
+        self._sent_key = None
     elif isinstance(order, ReleaseHold):
         self.release_geometry_hold()
     elif isinstance(order, Detour):

@@ -113,6 +113,7 @@ def _withdraw(self: _Self, t: int) -> None:
     if self.leg is None:
         self.busy = False
         self._seg_t0 = self.kernel.now
+        self._report()  # where it stands goes first: the next trajectory starts there
         self.send(self.station, 0, "trajectory_end", TrajectoryEnd(t, "withdrawn"))
 
 

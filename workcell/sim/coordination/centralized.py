@@ -69,7 +69,8 @@ from workcell.sim.coordination.distributed.plan import PieceUse, build_legs, tas
 from workcell.sim.coordination.guard import GeometryGuard
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
-from workcell.sim.protocol.exchange import ArmView, BackOffUntil, ControlChannel
+from workcell.sim.protocol.channel import ControlChannel
+from workcell.sim.protocol.exchange import ArmView, BackOffUntil
 from workcell.sim.protocol.messages import Piece, StartPermit, Trajectory
 from workcell.sim.protocol.states import TASK_MACHINE, TaskState
 from zones import ZoneManager
@@ -209,8 +210,13 @@ class Coordinator:
         # Zones of the problem that are not in the SDL (the compile's arm-pair
         # zones, workcell.geometry.reach) are kept apart by the plan order alone.
         self.sdl_zones = frozenset(zm.zone_names())
-        net.receivers[0] = self.receive
-        channel.attach_coordination(self.on_report)
+        self.cleared: list[list[tuple[int, ArmView]]] = [[] for _ in range(A)]
+        """Per arm, the departures cleared (S2.12) that its reports have not
+        acknowledged yet: (number of the answer, the view it asked from)."""
+        self.failing: set[int] = set()
+        """Arms told to fail whose report of the failure has not come yet."""
+        net.receivers[0] = channel.at_coordinator
+        channel.attach_coordination(self.on_report, frames=self.receive)
         self.guard = (
             GeometryGuard(compiled, clock=lambda: self.kernel.now, answer=guard_answer)
             if geometry
@@ -340,7 +346,12 @@ class Coordinator:
         if h is not None:
             h.cancel()
             self.dispatch_h[a] = None
-        if a in self.failed_arms or self.arm_busy[a] or self.activation is not None:
+        if (
+            a in self.failed_arms
+            or a in self.failing
+            or self.arm_busy[a]
+            or self.activation is not None
+        ):
             return
         t = self._next_task(a)
         if t < 0 or t in self.dropped:
@@ -362,7 +373,7 @@ class Coordinator:
         if permit:
             self.permitted.add(t)
         self.arm_busy[a] = True
-        self.net.send(0, a + 1, "trajectory", Trajectory(tuple(legs), permit))
+        self.channel.send(0, a + 1, "trajectory", Trajectory(tuple(legs), permit))
 
     def _startable(self, t: int) -> bool:
         return self.kernel.now >= self.release[t] and all(
@@ -374,7 +385,7 @@ class Coordinator:
             return
         self.permitted.add(t)
         a = int(self.p.mode_arm[int(self.plan.mode[t])])
-        self.net.send(0, a + 1, "wake_up", StartPermit(t))
+        self.channel.send(0, a + 1, "wake_up", StartPermit(t))
 
     def _on_release(self, t: int) -> None:
         if self.kernel.now >= self.release[t]:
@@ -447,7 +458,7 @@ class Coordinator:
     on_report = geometric.on_report
     blockers = geometric.blockers
     check_departure = geometric.check_departure
-    stop_movers_for = geometric.stop_movers_for
+    reserved = geometric.reserved
     try_detour = geometric.try_detour
     back_off = geometric.back_off
     arm_moved = geometric.arm_moved
@@ -470,6 +481,7 @@ class Coordinator:
     emergency_stop = recovery.emergency_stop
     _clear_alarm = recovery._clear_alarm
     arm_failed = recovery.arm_failed
+    arm_out = recovery.arm_out
     part_late = recovery.part_late
     parts_late = recovery.parts_late
     activate = recovery.activate

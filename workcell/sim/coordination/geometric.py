@@ -12,6 +12,7 @@ Functions here are methods of :class:`~workcell.sim.coordination.centralized.Coo
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -37,7 +38,7 @@ _Self = Any
 """The :class:`~workcell.sim.coordination.centralized.Coordinator` these functions are methods of (bound in its
 class body; typed loosely here: workcell.sim.coordination.centralized imports this module, never the reverse)."""
 
-__all__ = ["blockers", "check_departure", "initial_book", "on_report", "stop_movers_for"]
+__all__ = ["blockers", "check_departure", "initial_book", "on_report", "reserved"]
 
 
 def initial_book(compiled: Any) -> list[ArmView]:
@@ -48,69 +49,54 @@ def initial_book(compiled: Any) -> list[ArmView]:
     ]
 
 
-def on_report(self: _Self, a: int, report: Report) -> None:
-    """A record from arm ``a`` on the control channel: its view goes into
-    the book (an arm stopped off its plan has the moving arms in its way
-    stopped, :func:`stop_movers_for`); a departure request is answered
-    (S2.12); task notices."""
+def on_report(self: _Self, a: int, report: Report, taken: int = -1) -> None:
+    """A record from arm ``a`` (``taken``: the number of the last frame
+    from the coordination it had taken when it sent it): its view goes into
+    the book, and the motions cleared for it that it has acknowledged
+    leave the book's reservations (:func:`reserved`); a departure request is
+    answered (S2.12); task notices."""
+    if self.cleared[a] and taken >= 0:
+        left = [(seq, v) for seq, v in self.cleared[a] if seq > taken]
+        if len(left) < len(self.cleared[a]):
+            self.cleared[a] = left
+            self.arm_moved()  # space freed: the held arms look again
     if isinstance(report, MotionReport):
-        before = self.book[a]
-        self.book[a] = report.view
-        if report.moved and self.guard is not None:
-            if before.running and _stopped_off_plan(report.view):
-                self.stop_movers_for(a)
-            self.arm_moved()
+        view = report.view
+        self.book[a] = view
+        if view.failed and a in self.failing:
+            self.arm_out(a)
+        if self.guard is not None and (self.geo_held or self.away_until):
+            self.arm_moved()  # what the held and backed-off arms wait for may be over
     elif isinstance(report, DepartureRequest):
         self.book[a] = report.view
         go = self.guard is None or self.check_departure(report.view)
-        self.channel.order(a, Departure(go))
+        if go and self.guard is not None:
+            # reserved from now until the arm's report acknowledges the answer
+            seq = self.channel.next_order(a)
+            self.cleared[a].append((seq, replace(report.view, running=True)))
+        self.channel.order(a, Departure(go, report.ask))
     elif isinstance(report, TaskStarted):
         self.task_started(a, report.task, report.time)
     elif isinstance(report, TaskEnded):
         self.task_ended(a, report.task, report.time)
 
 
-def _stopped_off_plan(view: ArmView) -> bool:
-    """The arm stopped between its stations (a reflex stop on a crash, an
-    alarm, a hold): where it stands is not where the plan has it."""
-    return not view.running and view.leg is not None and not view.at_station and not view.failed
-
-
-def stop_movers_for(self: _Self, a: int) -> None:
-    """S2.12 against an arm that stopped off its plan: the arms cleared to
-    move were checked against arm ``a``'s planned motion, not against where
-    it now stands. Each moving arm whose motion to its next station reaches
-    arm ``a`` where it stands is told *stop* (an unasked
-    :class:`~workcell.sim.protocol.exchange.Departure` with ``go=False``);
-    it stands held like an arm stopped before it set off, and is released
-    (it asks again) when the held arms are looked at again after ``a``
-    moves on or gives way."""
-    now = self.kernel.now
-    for b, view in enumerate(self.book):
-        if b == a or not view.running or view.failed or view.leg is None:
-            continue
-        found = self.blockers(view)
-        if a not in found:
-            continue
-        self.geo_held[b] = found
-        self.trace.add(
-            now,
-            "sleep",
-            arm=self.p.arm_names[b],
-            task=self.p.task_names[view.leg.task],
-            detail=f"geometric conflict (S2.12): arm {self.p.arm_names[a]!r} stopped "
-            "in the way off its plan: stop",
-        )
-        self.channel.order(b, Departure(False))
+def reserved(self: _Self, a: int) -> list[ArmView]:
+    """The motions the coordination cleared for arm ``a`` whose start or
+    end it has not heard of yet (each a view moving from where the arm
+    asked; :meth:`~workcell.sim.coordination.guard.GeometryGuard.blockers`
+    checks them whatever the time)."""
+    return [v for _seq, v in self.cleared[a]]
 
 
 def blockers(self: _Self, mover: ArmView) -> list[int]:
     """The guard's answer for ``mover`` against the book (``mover`` in
-    its arm's place)."""
+    its arm's place) and the motions cleared and not yet acknowledged."""
     assert self.guard is not None
     book = list(self.book)
     book[mover.index] = mover
-    out: list[int] = self.guard.blockers(mover, book)
+    extra = [v for b, cl in enumerate(self.cleared) if b != mover.index for _s, v in cl]
+    out: list[int] = self.guard.blockers(mover, book, extra)
     return out
 
 
@@ -166,7 +152,7 @@ def try_detour(self: _Self, a: int) -> bool:
         or leg.kind != "task"
         or ctl.away
         or not blockers
-        or any(self.book[b].running for b in blockers)
+        or any(self.book[b].running or self.cleared[b] for b in blockers)
     ):
         return False
     key = (ctl.index, id(leg), ctl.k)
@@ -242,7 +228,7 @@ def back_off(self: _Self, b: int, until: BackOffUntil) -> bool:
     if it can go (standing on a leg, not pushing, not already away) and
     its way home is free. Returns whether it was ordered."""
     v = self.book[b]
-    if v.away or v.running or v.failed or v.leg is None or v.pushing:
+    if v.away or v.running or v.failed or v.leg is None or v.pushing or self.cleared[b]:
         return False
     arm = self.cc.cell.arms[b]
     home = np.asarray(self.cc.cell.start[b], dtype=float)
@@ -282,10 +268,16 @@ def arm_moved(self: _Self) -> None:
 
 
 def _recheck(self: _Self) -> None:
+    """The backed-off arms come back once their mover has passed; each arm
+    told *stop* is checked again from the book: a clear way ends its hold
+    (:class:`~workcell.sim.protocol.exchange.ReleaseHold`: it asks again
+    before it sets off); else an alternative trajectory, a back-off of the
+    arms in its way, or a promotion (S2.6)."""
     self._recheck_h = None
     for a in range(self.p.n_arms):
         ctl = self.book[a]
         if ctl.failed:
+            self.geo_held.pop(a, None)
             continue
         until = self.away_until.get(a)
         if ctl.away and ctl.leg is None and until is not None:
@@ -297,34 +289,43 @@ def _recheck(self: _Self) -> None:
             if mover.failed or passed or waits:
                 del self.away_until[a]
                 self.channel.order(a, ComeBack())
-        if not self.book[a].held:
+        if a not in self.geo_held:
             continue
-        self.channel.order(a, ReleaseHold())
-        if self.book[a].held and self.try_detour(a):
+        found = self.blockers(ctl)
+        if not found:
+            del self.geo_held[a]
+            self.trace.add(
+                self.kernel.now, "wake", arm=self.p.arm_names[a], detail="geometric conflict over"
+            )
+            self.channel.order(a, ReleaseHold())
             continue
-        ctl = self.book[a]
-        if ctl.held:
-            blockers = self.geo_held.get(a, [])
-            if (
-                blockers
-                and self.backoffs < self.max_backoffs
-                and all(self.book[b].waiting and not self.book[b].away for b in blockers)
-            ):
-                moved = False
-                for b in blockers:
-                    if self.back_off(b, BackOffUntil(a, ctl.leg, ctl.k)):
-                        moved = True
-                        self.backoffs += 1
-                        self.detours += 1
-                        self.trace.add(
-                            self.kernel.now,
-                            "detour",
-                            arm=self.p.arm_names[b],
-                            detail=f"geometric deadlock (S2.6): backs off to its home joints "
-                            f"out of arm {self.p.arm_names[a]!r}'s way",
-                        )
-                if not moved:
-                    self._promote(a, blockers)
+        self.geo_held[a] = found
+        if self.try_detour(a):
+            del self.geo_held[a]  # it asks again before it sets off on the detour
+            continue
+        if (
+            self.backoffs < self.max_backoffs
+            and ctl.leg is not None
+            and all(
+                self.book[b].waiting and not self.book[b].away and not self.cleared[b]
+                for b in found
+            )
+        ):
+            moved = False
+            for b in found:
+                if self.back_off(b, BackOffUntil(a, ctl.leg, ctl.k)):
+                    moved = True
+                    self.backoffs += 1
+                    self.detours += 1
+                    self.trace.add(
+                        self.kernel.now,
+                        "detour",
+                        arm=self.p.arm_names[b],
+                        detail=f"geometric deadlock (S2.6): backs off to its home joints "
+                        f"out of arm {self.p.arm_names[a]!r}'s way",
+                    )
+            if not moved:
+                self._promote(a, found)
 
 
 def _promote(self: _Self, a: int, blockers: list[int]) -> None:

@@ -14,7 +14,7 @@ from workcell.arms.base import shape_frames
 from workcell.compile import CompiledCell
 from workcell.geometry import CollisionWorld
 from workcell.geometry._zone_sweep_jit import capsules_touch, segment_points
-from workcell.geometry.zone_sweep import _segment_distances, _shape_capsules
+from workcell.geometry.zone_sweep import _shape_capsules
 from workcell.sim.protocol.exchange import ArmView
 
 __all__ = ["GeometryGuard"]
@@ -53,10 +53,14 @@ class GeometryGuard:
     arm is (its book of the arms' reports,
     :class:`~workcell.sim.protocol.exchange.ArmView`). Before an arm sets off towards its next
     station it checks that motion, sampled every ``dt`` seconds, against
-    every other arm: a standing arm where it stands, a moving arm along its
-    trajectory until its own next station (where it may stop; it is checked
-    again before it goes on), over the time until every one of them has
-    reached its next station. The test is the conservative capsule test of
+    every other arm, whatever the time (:meth:`blockers`): a standing arm
+    where it stands, an arm that may be moving (its last report says so,
+    or a departure cleared for it is not yet acknowledged) anywhere on what
+    is left of its leg up to its next station (it cannot pass that station
+    without being cleared again). The book is one medium delay old, so the
+    check never relies on when an arm is where: the answer stays right
+    whatever happened since (an arm stopped by a crash or an alarm stops on
+    the stretch already reserved). The test is the conservative capsule test of
     the zone sweep (every shape inside a capsule, grown by ``padding``),
     whose candidates FCL decides with the shapes grown by ``padding / 2``.
     A contact means *stop*: the arm waits at its station until the way is
@@ -105,6 +109,7 @@ class GeometryGuard:
             self._frames_of.append((idx, np.ascontiguousarray(hw)))
         self._reach = [float(r.max()) if len(r) else 0.0 for _l, r in self.capsules]
         self._boxes: dict[int, tuple[FloatArray, Any, tuple[float, ...]]] = {}
+        self._segments: dict[tuple[int, int, float], tuple[Any, Any]] = {}
         self.world = CollisionWorld()
         for arm, q in zip(cell.arms, cell.start, strict=True):
             self.world.add_arm(arm, q=q, padding=self.padding / 2)
@@ -156,9 +161,19 @@ class GeometryGuard:
         pts = segment_points(fr, idx, hw)
         return pts[0], pts[1]
 
-    def blockers(self, mover: ArmView, arms: Sequence[ArmView]) -> list[int]:
-        """Arms in the way of ``mover``'s motion to its next station
-        (``arms``: every arm's view, ``mover`` among them)."""
+    def blockers(
+        self, mover: ArmView, arms: Sequence[ArmView], extra: Sequence[ArmView] = ()
+    ) -> list[int]:
+        """Arms in the way of ``mover``'s motion to its next station.
+
+        ``arms``: every arm's view as the book has it, ``mover`` among them;
+        ``extra``: further views the other arms may be in (the motions the
+        coordination cleared and has not heard the start or the end of).
+        A standing view is checked where it stands; a moving one
+        (``running``) anywhere on what is left of its leg up to its next
+        station, whatever the time (it may have stopped anywhere there, or
+        be late, by the medium's delay). The mover's own motion is checked
+        whatever the time too: its start is one medium delay away."""
         if self.answer is not None:
             self.checks += 1
             return [int(b) for b in self.answer(mover, arms)]
@@ -173,7 +188,7 @@ class GeometryGuard:
         self.checks += 1
         mx0, my0, mz0, mx1, my1, mz1 = self._box_floats(mover)
         near = []
-        for o in arms:
+        for o in (*arms, *extra):
             if o.index == mover.index:
                 continue
             ox0, oy0, oz0, ox1, oy1, oz1 = self._box_floats(o)
@@ -188,65 +203,83 @@ class GeometryGuard:
                 near.append(o)
         if not near:
             return []
-        now = self.clock()
-        # until the mover and every moving arm near it reach their next stations
-        horizon = max([dur] + [o.next_stop_time(now) - now for o in near if o.running])
-        n = max(2, math.ceil(horizon / self.dt) + 1)
-        off = np.arange(n, dtype=float) * (horizon / (n - 1))  # np.linspace(0, horizon, n)
-        off[-1] = horizon
-        times = now + off
+        n = max(2, math.ceil(dur / self.dt) + 1)
+        off = np.arange(n, dtype=float) * (dur / (n - 1))  # np.linspace(0, dur, n)
+        off[-1] = dur
         qa = leg.trajectory.sample(np.minimum(tau0 + off, tau1))
         a0, a1 = self._ends(mover.index, qa)
-        ra = self.capsules[mover.index][1]
-        out = []
+        a0 = np.ascontiguousarray(a0)
+        a1 = np.ascontiguousarray(a1)
+        ra = np.ascontiguousarray(self.capsules[mover.index][1], dtype=float)
+        out: list[int] = []
         reach = self._reach[mover.index] + self.padding
-        lx0, ly0, lz0, hx1, hy1, hz1 = _swept_box(a0, a1, reach).tolist()
+        box = _swept_box(a0, a1, reach)
         for other in near:
-            # a standing arm is sampled once
-            qb = other.predict(times if other.running else times[:1], now)
-            b0, b1 = self._ends(other.index, qb)
-            rb = self.capsules[other.index][1]
-            bx0, by0, bz0, bx1, by1, bz1 = _swept_box(b0, b1, self._reach[other.index]).tolist()
-            if bx0 > hx1 or by0 > hy1 or bz0 > hz1 or bx1 < lx0 or by1 < ly0 or bz1 < lz0:
-                continue  # swept boxes apart
-            if other.running:
-                d = _segment_distances(
-                    a0[:, :, None, :], a1[:, :, None, :], b0[:, None, :, :], b1[:, None, :, :]
-                )
-                hit = np.any(d <= ra[:, None] + rb[None, :] + self.padding, axis=(1, 2))
-            else:  # a standing arm: the compiled test against fixed capsules
-                hit = capsules_touch(
-                    np.ascontiguousarray(a0),
-                    np.ascontiguousarray(a1),
-                    np.ascontiguousarray(ra, dtype=float),
-                    np.ascontiguousarray(b0[0]),
-                    np.ascontiguousarray(b1[0]),
-                    np.ascontiguousarray(rb, dtype=float),
-                    self.padding,
-                )
-            if hit.any() and self._confirm(mover.index, qa, other, times, now, hit):
-                out.append(other.index)
+            if other.index in out:
+                continue
+            qb, b0, b1, boxes = self._poses(other)
+            rb = np.ascontiguousarray(self.capsules[other.index][1], dtype=float)
+            keep = np.flatnonzero(
+                (boxes[:, 0] <= box[3])
+                & (boxes[:, 1] <= box[4])
+                & (boxes[:, 2] <= box[5])
+                & (boxes[:, 3] >= box[0])
+                & (boxes[:, 4] >= box[1])
+                & (boxes[:, 5] >= box[2])
+            )
+            for j in keep.tolist():
+                hit = capsules_touch(a0, a1, ra, b0[j], b1[j], rb, self.padding)
+                if hit.any() and self._confirm(mover.index, qa[hit], other.index, qb[j]):
+                    out.append(other.index)
+                    break
         return out
 
-    def _confirm(
-        self,
-        a: int,
-        qa: FloatArray,
-        other: ArmView,
-        times: FloatArray,
-        now: float,
-        near: FloatArray,
-    ) -> bool:
-        """FCL (shapes grown by half the padding) on the capsule test's candidates."""
-        idx = np.flatnonzero(near)
-        arm_a, arm_b = self.cell.arms[a], self.cell.arms[other.index]
-        tfa = arm_a.shape_transforms(qa[idx])
-        tfb = arm_b.shape_transforms(other.predict(times[idx], now))
-        if len(tfb) < len(idx):  # pragma: no cover - predict keeps the length
-            tfb = np.repeat(tfb[:1], len(idx), axis=0)
-        for i in range(len(idx)):
+    def _poses(self, view: ArmView) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Where arm ``view.index`` may be: its joints (M, dof), its capsule
+        end points (M, S, 3) twice and each pose's box (M, 6) grown by its
+        reach. A standing arm: one pose; a moving one: its leg from
+        ``view.tau`` to its next station, every ``dt`` seconds (cached per
+        leg, start and station)."""
+        leg = view.leg
+        if leg is None or not view.running:
+            q = view.q[None, :] if leg is None else leg.trajectory.sample(np.array([view.tau]))
+            return self._pose_set(view.index, q)
+        key = (id(leg), view.k, view.tau)
+        got = self._segments.get(key)
+        if got is not None and got[0] is leg:
+            cached: tuple[FloatArray, FloatArray, FloatArray, FloatArray] = got[1]
+            return cached
+        tau1 = float(leg.stations[view.k].tau)
+        tau0 = min(float(view.tau), tau1)
+        taus = np.append(np.arange(tau0, tau1, self.dt), tau1)
+        out = self._pose_set(view.index, leg.trajectory.sample(taus))
+        if len(self._segments) > 4096:
+            self._segments.clear()
+        self._segments[key] = (leg, out)
+        return out
+
+    def _pose_set(
+        self, a: int, q: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        b0, b1 = self._ends(a, q)
+        r = self._reach[a]
+        lo = np.minimum(b0.min(axis=1), b1.min(axis=1)) - r
+        hi = np.maximum(b0.max(axis=1), b1.max(axis=1)) + r
+        return (
+            q,
+            np.ascontiguousarray(b0),
+            np.ascontiguousarray(b1),
+            np.ascontiguousarray(np.concatenate([lo, hi], axis=1)),
+        )
+
+    def _confirm(self, a: int, qa: FloatArray, b: int, qb: FloatArray) -> bool:
+        """FCL (shapes grown by half the padding) on the capsule test's
+        candidates: arm ``a`` at each of ``qa`` against arm ``b`` at ``qb``."""
+        arm_a, arm_b = self.cell.arms[a], self.cell.arms[b]
+        tfa = arm_a.shape_transforms(qa)
+        self.world.set_group_transforms(arm_b.name, arm_b.shape_transforms(qb[None, :])[0])
+        for i in range(len(qa)):
             self.world.set_group_transforms(arm_a.name, tfa[i])
-            self.world.set_group_transforms(arm_b.name, tfb[i])
             if self.world.collide(arm_a.name, arm_b.name):
                 return True
         return False

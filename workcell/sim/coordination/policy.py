@@ -8,7 +8,7 @@ and ``"distributed"``, one peer per arm and no coordinator
 mutual exclusion by request/reply in plan order, activations and emergency
 stops broadcast, S2.4 and S2.7's last sentence). A policy is constructed
 with the compiled cell, the plan, the event loop, the link, the trace and
-the control channel (:class:`~workcell.sim.protocol.exchange.ControlChannel`,
+the control channel (:class:`~workcell.sim.protocol.channel.ControlChannel`,
 the S2.12 exchange); it knows the arms only from their messages. The
 centralized one talks to the arms through the link (station 0 receives,
 the arms are stations ``1..n``), the distributed one's peers share the
@@ -35,7 +35,9 @@ from workcell.sim.coordination.centralized import Coordinator
 from workcell.sim.coordination.distributed import DistributedPolicy
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
-from workcell.sim.protocol.exchange import ArmView, ControlChannel
+from workcell.sim.protocol.channel import ControlChannel
+from workcell.sim.protocol.exchange import ArmView
+from workcell.sim.protocol.messages import LateNotice
 from workcell.sim.protocol.states import TaskState
 
 __all__ = ["POLICIES", "CoordinationPolicy", "PolicyFactory", "make_policy", "register_policy"]
@@ -79,11 +81,11 @@ class CoordinationPolicy(Protocol):
     def activate(self, zones: tuple[str, ...]) -> None:
         """Fault: change the active zones (S2.5)."""
 
-    def part_late(self, tasks: list[int], arrival: float, part: str) -> None:
-        """Fault: ``part`` comes at ``arrival`` for ``tasks``."""
+    def part_late(self, notice: LateNotice) -> None:
+        """Fault: ``notice.part`` comes at ``notice.arrival`` for ``notice.tasks``."""
 
-    def parts_late(self, notices: Sequence[tuple[list[int], float, str]]) -> None:
-        """Fault: parts found late at one instant, ``(tasks, arrival, part)`` each."""
+    def parts_late(self, notices: Sequence[LateNotice]) -> None:
+        """Fault: parts found late at one instant (one :class:`LateNotice` each)."""
 
 
 PolicyFactory = Callable[..., CoordinationPolicy]

@@ -21,6 +21,7 @@ from workcell.sim.protocol.messages import (
     ActiveZones,
     AlarmClear,
     AlarmStop,
+    LateNotice,
     Piece,
     Withdraw,
 )
@@ -38,7 +39,7 @@ def emergency_stop(self: _Self, duration: float) -> None:
     self.trace.add(self.kernel.now, "fault", detail=f"emergency stop for {duration:g} s")
     stop = next(self._stop_ids)
     self.alarms.add(stop)
-    self.net.send(0, BROADCAST, "alarm", AlarmStop(stop))
+    self.channel.send(0, BROADCAST, "alarm", AlarmStop(stop))
     self.kernel.schedule(duration, self._clear_alarm, stop)
 
 
@@ -49,18 +50,30 @@ def _clear_alarm(self: _Self, stop: int) -> None:
     self.trace.add(self.kernel.now, "fault", detail="emergency stop cleared")
     for a in range(self.p.n_arms):
         if a not in self.failed_arms:
-            self.net.send(0, a + 1, "wake_up", AlarmClear(stop))
+            self.channel.send(0, a + 1, "wake_up", AlarmClear(stop))
 
 
 def arm_failed(self: _Self, a: int) -> None:
-    """Arm ``a`` failed: give back its resources, reassign its tasks."""
-    p = self.p
-    self.failed_arms.add(a)
+    """Arm ``a`` failed: it is told to stop for good (a
+    :class:`~workcell.sim.protocol.exchange.Fail` order, one medium delay
+    away); once its report says it is out (:func:`arm_out`) its resources
+    are given back and its tasks reassigned. Nothing new is sent to it."""
+    if a in self.failed_arms or a in self.failing:
+        return
+    self.failing.add(a)
     self.channel.order(a, Fail())
-    self.trace.add(self.kernel.now, "fault", arm=p.arm_names[a], detail="arm failure")
+    self.trace.add(self.kernel.now, "fault", arm=self.p.arm_names[a], detail="arm failure")
     h = self.dispatch_h[a]
     if h is not None:
         h.cancel()
+        self.dispatch_h[a] = None
+
+
+def arm_out(self: _Self, a: int) -> None:
+    """Arm ``a`` reported its failure: give back its resources, reassign its tasks."""
+    p = self.p
+    self.failing.discard(a)
+    self.failed_arms.add(a)
     zm = self.zm
     if self.zone_checks:
         if zm.waiting(a) is not None:
@@ -120,28 +133,30 @@ def arm_failed(self: _Self, a: int) -> None:
         self._try_activation()
 
 
-def parts_late(self: _Self, notices: Sequence[tuple[list[int], float, str]]) -> None:
-    """Parts found late at one instant: ``(tasks, arrival, part)`` each.
+def parts_late(self: _Self, notices: Sequence[LateNotice]) -> None:
+    """Parts found late at one instant (one :class:`LateNotice` each).
 
     Every gated task's release moves first, then each notice is handled
     (:func:`part_late`): a re-dispatch that one notice triggers can never
     permit a task that another notice of the same instant holds back (a
     trajectory sent with its start permitted between two notices reached
     its arm before the withdrawal did, on a medium with delay)."""
-    for tasks, arrival, _part in notices:
-        for t in tasks:
+    for notice in notices:
+        for t in notice.tasks:
             if self.status[t] not in ("done", "running"):
-                self.release[t] = max(self.release[t], arrival)
-    for tasks, arrival, part in notices:
-        self.part_late(tasks, arrival, part)
+                self.release[t] = max(self.release[t], notice.arrival)
+    for notice in notices:
+        self.part_late(notice)
 
 
-def part_late(self: _Self, tasks: list[int], arrival: float, part: str) -> None:
-    """Part ``part`` will come at ``arrival`` (inf: never) for ``tasks``.
+def part_late(self: _Self, notice: LateNotice) -> None:
+    """Part ``notice.part`` will come at ``notice.arrival`` (inf: never)
+    for ``notice.tasks``.
 
     A gated task already dispatched with its start permitted has the
     permission revoked: it is withdrawn (its arm has not started it)
     and dispatched again under the new release."""
+    tasks, arrival, part = notice.tasks, notice.arrival, notice.part
     for t in tasks:
         if self.status[t] in ("done", "running"):
             continue
@@ -155,8 +170,7 @@ def part_late(self: _Self, tasks: list[int], arrival: float, part: str) -> None:
             self.cause_kind[t] = "part_missing"
         else:
             self.kernel.schedule(arrival, self._on_release, t, absolute=True)
-    when = "never comes" if math.isinf(arrival) else f"comes at {arrival:.6g} s"
-    self.trace.add(self.kernel.now, "fault", detail=f"part {part!r} is late: {when}")
+    self.trace.add(self.kernel.now, "fault", detail=notice.describe())
     if math.isinf(arrival):
         # the tasks it gates, and everything after them, can never run
         stack = [t for t in tasks if self.status[t] in ("pending", "dispatched")]
@@ -200,7 +214,7 @@ def activate(self: _Self, zones: tuple[str, ...]) -> None:
             self.activation_acks.add(a)
         else:
             self.activation_slept.add(a)
-            self.net.send(0, a + 1, "sleep", ActivationStop(self.activation_id))
+            self.channel.send(0, a + 1, "sleep", ActivationStop(self.activation_id))
     self._try_activation()
 
 
@@ -220,11 +234,11 @@ def _try_activation(self: _Self) -> None:
     for a in range(self.p.n_arms):
         if a in self.failed_arms:
             continue
-        self.net.send(0, a + 1, "active_zone_grant", ActiveZones(tuple(zones)))
+        self.channel.send(0, a + 1, "active_zone_grant", ActiveZones(tuple(zones)))
         # every arm told to stop is released, busy or not by now (its task
         # may have ended while the stop was on its way)
         if a in self.activation_slept:
-            self.net.send(0, a + 1, "wake_up", ActivationGo(self.activation_id))
+            self.channel.send(0, a + 1, "wake_up", ActivationGo(self.activation_id))
     self.activation_slept = set()
     for a in range(self.p.n_arms):
         self._dispatch_next(a)
@@ -246,7 +260,7 @@ def _withdraw(self: _Self, t: int) -> None:
     self.told_sleep = {q for q in self.told_sleep if q.task != t}
     self.task_pieces.pop(t, None)
     self.permitted.discard(t)
-    self.net.send(0, a + 1, "sleep", Withdraw(t))
+    self.channel.send(0, a + 1, "sleep", Withdraw(t))
 
 
 def _fail_never(self: _Self) -> None:

@@ -156,7 +156,7 @@ def _sleep(self: _Self, a: int, piece: Piece, name: str, task: str, why: str) ->
     self.trace.add(
         self.kernel.now, "sleep", arm=self.p.arm_names[a], task=task, zone=name, detail=why
     )
-    self.net.send(0, a + 1, "sleep", piece)
+    self.channel.send(0, a + 1, "sleep", piece)
 
 
 def _granted(self: _Self, a: int, piece: Piece) -> None:
@@ -165,7 +165,7 @@ def _granted(self: _Self, a: int, piece: Piece) -> None:
     task = self.p.task_names[piece.task] if piece.task >= 0 else ""
     if piece in self.told_sleep:
         self.trace.add(self.kernel.now, "wake", arm=self.p.arm_names[a], task=task, zone=name)
-        self.net.send(0, a + 1, "wake_up", piece)
+        self.channel.send(0, a + 1, "wake_up", piece)
     else:
         self.trace.add(
             self.kernel.now,
@@ -175,7 +175,7 @@ def _granted(self: _Self, a: int, piece: Piece) -> None:
             zone=name,
             detail=piece.kind,
         )
-        self.net.send(0, a + 1, "zone_grant", piece)
+        self.channel.send(0, a + 1, "zone_grant", piece)
 
 
 def _zm_request(self: _Self, a: int, piece: Piece) -> tuple[bool, tuple[Any, ...]]:

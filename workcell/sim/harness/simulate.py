@@ -58,7 +58,8 @@ from workcell.sim.harness.faults import (
 from workcell.sim.harness.monitor_live import LiveMonitor
 from workcell.sim.harness.options import CONTROL_TIME, COORDINATION_POLICIES, SimOptions
 from workcell.sim.harness.result import SimResult, build_result
-from workcell.sim.protocol.exchange import ControlChannel
+from workcell.sim.protocol.channel import ControlChannel
+from workcell.sim.protocol.messages import LateNotice
 
 __all__ = ["CONTROL_TIME", "SimOptions", "SimResult", "check_control_bound", "simulate"]
 
@@ -224,7 +225,7 @@ def simulate(
         validate(p, schedule)
     fplan = as_plan(faults)
     check_fault_names(fplan, cc.cell)  # the checks of workcell.faultcheck.check_faults
-    factory: Any = POLICIES[coordination]
+    POLICIES[coordination]
     seed = int(seed)
     thresholds = free_thresholds(options.force_threshold, p.arm_names)
     searches = (
@@ -243,10 +244,10 @@ def simulate(
     rng = np.random.default_rng(seed)
     names = ["coordinator", *p.arm_names]
     net = Link(kernel, med, trace, names, loss, rng)
-    channel = ControlChannel(A)
-    # a policy whose peers share the arms' stations (``colocated``) takes a
-    # controller's messages to station 0 at that station (the channel's local)
-    colocated = bool(getattr(factory, "colocated", False))
+    # every frame between an arm and the coordinator goes on its arm's
+    # stream of the channel, in order (a policy whose peers share the arms'
+    # stations takes a controller's messages to station 0 at that station)
+    channel = ControlChannel(A, net)
     period = float(tick) if tick is not None else 1e-3
     ticker = Ticker(kernel, period) if tick is not None else None
     arms: list[ArmController] = []
@@ -256,7 +257,7 @@ def simulate(
             a,
             arm,
             q0,
-            _local_send(channel) if colocated else net.send,
+            channel.send,
             channel,
             trace,
             period,
@@ -289,16 +290,16 @@ def simulate(
     )
     arm_index = {n: i for i, n in enumerate(p.arm_names)}
     arrivals = cc.cell.taskset.expected_arrivals()
-    late: dict[float, list[tuple[list[int], float, str]]] = {}
+    late: dict[float, list[LateNotice]] = {}
     for f in fplan:
         if isinstance(f, LatePart):
             expected = float(arrivals.get(f.part, 0.0))
-            tasks = [
+            tasks = tuple(
                 t
                 for t, task in enumerate(cc.cell.taskset.tasks)
                 if f.part in cc.cell.taskset.gating_parts(task.id)
-            ]
-            late.setdefault(expected, []).append((tasks, expected + f.delay, f.part))
+            )
+            late.setdefault(expected, []).append(LateNotice(tasks, expected + f.delay, f.part))
     told: set[float] = set()
     for f in fplan:
         if isinstance(f, ArmFailure):
@@ -361,17 +362,6 @@ def simulate(
         live,
     )
     return result
-
-
-def _local_send(channel: ControlChannel) -> Callable[[int, int, str, Any], None]:
-    """A controller's ``send`` when its coordination shares its station."""
-
-    def send(src: int, dst: int, kind: str, payload: Any) -> None:
-        if dst != 0:  # pragma: no cover - controllers send to station 0 only
-            raise InternalError(f"simulate: arm station {src} sent {kind!r} to station {dst}")
-        channel.local(src, kind, payload)
-
-    return send
 
 
 def _crash(arm: ArmController, trace: Trace, recovery: float, force: float) -> None:

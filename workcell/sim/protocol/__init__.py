@@ -5,12 +5,15 @@
 * :mod:`.records` -- the motion and task records an arm controller
   publishes (:class:`MotionLog`), the safety monitor's only input;
 * :mod:`.states` -- the protocol participants' states and transition tables;
-* :mod:`.exchange` -- the S2.12 exchange on the :class:`ControlChannel`:
-  motion reports (:class:`ArmView`), departure requests and answers,
-  excursion and failure orders, task start and end notices.
+* :mod:`.exchange` -- the S2.12 exchange, frames of the medium: motion
+  reports (:class:`ArmView`), departure requests and answers, excursion and
+  failure orders, task start and end notices;
+* :mod:`.channel` -- the :class:`ControlChannel`: each arm's streams to and
+  from the coordinator, numbered and taken in order.
 """
 
-from workcell.sim.protocol.exchange import ArmView, ControlChannel
+from workcell.sim.protocol.channel import ControlChannel
+from workcell.sim.protocol.exchange import ArmView
 from workcell.sim.protocol.messages import LEG_KINDS, PIECE_KINDS, Leg, Mark, Piece, Station
 from workcell.sim.protocol.records import MotionLog, MotionRecord, TaskRecord
 from workcell.sim.protocol.states import (

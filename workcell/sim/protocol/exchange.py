@@ -3,7 +3,8 @@ departure question and its answer, and the excursion orders.
 
 Zone requests, grants, sleeps, wake-ups, releases, trajectories and alarms
 travel through the medium (:mod:`workcell.sim.comms.link`). The geometric
-check of S2.12 is the other exchange, and it is made of messages too:
+check of S2.12 is the other exchange, made of messages through the same
+medium:
 
 * **Reports** (arm -> coordination). :class:`MotionReport` carries the
   arm's :class:`ArmView` whenever its motion or its standing changes (S2.7:
@@ -20,53 +21,72 @@ check of S2.12 is the other exchange, and it is made of messages too:
 
 The coordination decides from its own book of the arms (the last
 :class:`ArmView` each reported), never from a controller. Every record is
-frozen. The :class:`ControlChannel` numbers the records of each direction of
-each arm (0, 1, 2, ...) and the receiver drops one not newer than the last
-it took.
+frozen.
 
-**Delay.** The channel delivers at the instant of sending, free of delay and
-loss: S2.12's check is modelled as answered at once. The check is only
-sound on a current book: a motion cleared against a report one medium
-delay old could run into an arm that stopped in the meantime (a crash, an
-alarm) or set off since, so on a delayed medium the honest check would
-have to reserve each motion's whole swept volume regardless of time, which
-is a different (far more conservative) check than S2.12's. The numbers of
-frames and bytes on the medium (:class:`~workcell.sim.comms.link.Link`) do
-not count these records; :attr:`ControlChannel.sent` does.
+**On the medium.** Every record is a frame of the medium like the S2.7
+messages, of its own kind and size (:data:`KINDS`, the sizes in
+:data:`~workcell.sim.comms.medium.MESSAGE_BYTES`: a report or request 67
+bytes, a task notice 37, the answer 30, release/come back/fail 27, a
+back-off 148, a detour 154), counted in the link's frames, delayed,
+lost and sent again like the rest. The :class:`~workcell.sim.protocol.channel.ControlChannel` only routes
+them: every frame between an arm's station and the coordinator's (the
+records and the S2.7 messages) goes on that arm's stream of its direction,
+numbered 0, 1, 2, ... (:class:`~workcell.sim.protocol.channel.Sequenced`), and the receiver takes each
+stream in order (a frame that overtook a lost one waits for it). So the
+coordinator hears an arm's reports in the order they were made (where an
+arm stands before its ``trajectory_end``), and an arm takes the answers and
+orders in the order they were given.
 
-Examples
---------
->>> ch = ControlChannel(2)
->>> got = []
->>> ch.attach_coordination(lambda arm, rec: got.append((arm, type(rec).__name__)))
->>> ch.attach_arm(1, lambda rec: got.append(("arm 1", type(rec).__name__)))
->>> ch.report(1, TaskStarted(3, 0.5))
->>> ch.order(1, ReleaseHold())
->>> got, ch.sent
-([(1, 'TaskStarted'), ('arm 1', 'ReleaseHold')], 2)
+**Soundness on an old book.** The book is one medium delay old (more with
+losses), so the check (:class:`~workcell.sim.coordination.guard.GeometryGuard`)
+never relies on *when* an arm is where:
+
+* an arm sets off only on a *continue* answer to its latest request, and
+  only if nothing stopped it since it asked (:class:`Departure`); it stops
+  at its next station at the latest (every station pass is asked for);
+* a motion the coordinator clears is in its book from that instant: the
+  arm may be anywhere from where it asked to its next station, until a
+  report sent after the arm took the answer comes back
+  (:attr:`~workcell.sim.protocol.channel.Sequenced.taken` acknowledges it). Whatever the arm did
+  meanwhile (set off late, stopped on a crash or an alarm) stays on that
+  stretch;
+* an arm the book has moving is checked anywhere on what is left of its
+  leg from where it reported, up to its next station, whatever the time;
+  an arm the book has standing stands there (it cannot set off without an
+  answer the coordinator would know of).
+
+Two arms are cleared only if every pose one may take touches no pose the
+other may take; the check is the time-free swept test of both stretches.
+A crash or an alarm stop leaves the arm on a stretch the book already
+reserves, so no moving arm has to be stopped for it. The literal S2.12
+check (the mover against the arms *standing* in the subzone, the zones
+keeping the moving arms apart) is not enough for the compiled cells: with
+the moving arms left out of the check, 15 of 300 campaign episodes on
+``parking`` and ``scara4`` collide (docs/simulation.md). A failed arm is
+told :class:`Fail` and its zones are given back once its report says it
+is out.
+
+The routing is :class:`~workcell.sim.protocol.channel.ControlChannel`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from multiarm.errors import InternalError
 from multiarm.types import FloatArray
 from workcell.arms import JointTrajectory
 from workcell.sim.protocol.messages import Leg
 
 __all__ = [
+    "KINDS",
     "ORDERS",
     "REPORTS",
     "ArmView",
     "BackOff",
     "BackOffUntil",
     "ComeBack",
-    "ControlChannel",
     "Departure",
     "DepartureRequest",
     "Detour",
@@ -223,9 +243,11 @@ class MotionReport:
 
 @dataclass(frozen=True, slots=True)
 class DepartureRequest:
-    """S2.12: may the arm set off from ``view`` towards its next station?"""
+    """S2.12: may the arm set off from ``view`` towards its next station?
+    ``ask`` numbers the arm's requests (the answer names it)."""
 
     view: ArmView
+    ask: int = 0
 
 
 @dataclass(frozen=True, slots=True)
@@ -256,13 +278,15 @@ REPORTS: tuple[type, ...] = (MotionReport, DepartureRequest, TaskStarted, TaskEn
 
 @dataclass(frozen=True, slots=True)
 class Departure:
-    """The answer to a :class:`DepartureRequest`: *continue* or *stop*.
+    """The answer to the :class:`DepartureRequest` numbered ``ask``:
+    *continue* (``go``) or *stop* (released by :class:`ReleaseHold`).
 
-    Sent unasked with ``go=False``: *stop* where the arm is now (an arm that
-    stopped off its plan stands in the way of its motion); released by
-    :class:`ReleaseHold`."""
+    The arm sets off on *continue* only if the answer is to its latest
+    request and nothing stopped it since it asked; else it stands, and its
+    next report tells the coordination so."""
 
     go: bool
+    ask: int = 0
 
 
 @dataclass(frozen=True, slots=True)
@@ -304,115 +328,17 @@ Order = Departure | Detour | ReleaseHold | BackOff | ComeBack | Fail
 ORDERS: tuple[type, ...] = (Departure, Detour, ReleaseHold, BackOff, ComeBack, Fail)
 
 
-class ControlChannel:
-    """The S2.12 exchange: records delivered at the instant of sending
-    (module docstring), numbered per arm and direction.
-
-    Parameters
-    ----------
-    arms : int
-        Number of arms.
-
-    Attributes
-    ----------
-    sent : int
-        Records sent (both directions).
-    stale : int
-        Records dropped as not newer than the last taken.
-    """
-
-    def __init__(self, arms: int) -> None:
-        self.n_arms = int(arms)
-        self._arm_rx: list[Callable[[Any], None] | None] = [None] * self.n_arms
-        self._arm_msg: list[Callable[[str, Any], None] | None] = [None] * self.n_arms
-        self._coord_rx: Callable[[int, Any], None] | None = None
-        self._local_rx: Callable[[int, str, Any], None] | None = None
-        self._station_rx: Callable[[int, Any], bool] | None = None
-        self._next = [[0, 0] for _ in range(self.n_arms)]
-        """Per arm: next sequence number of its reports, of its orders."""
-        self._seen = [[-1, -1] for _ in range(self.n_arms)]
-        """Per arm: last sequence number taken of its reports, of its orders."""
-        self.sent = 0
-        self.stale = 0
-
-    def attach_arm(
-        self,
-        arm: int,
-        receive: Callable[[Any], None],
-        message: Callable[[str, Any], None] | None = None,
-    ) -> None:
-        """The arm's controller takes its orders with ``receive(order)``
-        and the coordination's messages at its station with
-        ``message(kind, payload)``."""
-        self._arm_rx[arm] = receive
-        self._arm_msg[arm] = message
-
-    def attach_coordination(
-        self,
-        receive: Callable[[int, Any], None],
-        local: Callable[[int, str, Any], None] | None = None,
-        station: Callable[[int, Any], bool] | None = None,
-    ) -> None:
-        """The coordination takes reports with ``receive(arm, report)``.
-        A policy whose peers share the arms' stations also takes the
-        controllers' messages with ``local(station, kind, payload)`` and
-        the frames that reach arm ``a``'s station first with
-        ``station(a, frame) -> taken``."""
-        self._coord_rx = receive
-        self._local_rx = local
-        self._station_rx = station
-
-    def at_station(self, arm: int, frame: Any) -> None:
-        """A frame of the medium reached ``arm``'s station: a coordination
-        sharing the station takes it first, else the controller does
-        (``frame.kind``, ``frame.payload[0]``)."""
-        take = self._station_rx
-        if take is not None and take(arm, frame):
-            return
-        self.to_controller(arm, frame.kind, frame.payload[0])
-
-    def to_controller(self, arm: int, kind: str, payload: Any) -> None:
-        """A coordination message handed to ``arm``'s controller at its station."""
-        rx = self._arm_msg[arm]
-        if rx is None:
-            raise InternalError(f"control channel: no controller at arm {arm}'s station")
-        rx(kind, payload)
-
-    @property
-    def colocated(self) -> bool:
-        """The coordination takes the controllers' messages at their own station."""
-        return self._local_rx is not None
-
-    def local(self, station: int, kind: str, payload: Any) -> None:
-        """A controller's message to a coordination at its own station."""
-        if self._local_rx is None:
-            raise InternalError("control channel: no coordination at the arms' stations")
-        self._local_rx(station, kind, payload)
-
-    def report(self, arm: int, record: Report) -> None:
-        """Send ``record`` from ``arm`` to the coordination."""
-        seq = self._next[arm][0]
-        self._next[arm][0] = seq + 1
-        self.sent += 1
-        rx = self._coord_rx
-        if rx is None:
-            return
-        if seq <= self._seen[arm][0]:  # pragma: no cover - in order by construction
-            self.stale += 1
-            return
-        self._seen[arm][0] = seq
-        rx(arm, record)
-
-    def order(self, arm: int, record: Order) -> None:
-        """Send ``record`` from the coordination to ``arm``."""
-        seq = self._next[arm][1]
-        self._next[arm][1] = seq + 1
-        self.sent += 1
-        rx = self._arm_rx[arm]
-        if rx is None:
-            raise InternalError(f"control channel: no controller for arm {arm}")
-        if seq <= self._seen[arm][1]:  # pragma: no cover - in order by construction
-            self.stale += 1
-            return
-        self._seen[arm][1] = seq
-        rx(record)
+KINDS: dict[type, str] = {
+    MotionReport: "motion_report",
+    DepartureRequest: "departure_request",
+    TaskStarted: "task_started",
+    TaskEnded: "task_ended",
+    Departure: "departure",
+    Detour: "detour",
+    ReleaseHold: "release_hold",
+    BackOff: "back_off",
+    ComeBack: "come_back",
+    Fail: "fail",
+}
+"""The frame kind of each record of the exchange (sizes:
+:data:`~workcell.sim.comms.medium.MESSAGE_BYTES`)."""

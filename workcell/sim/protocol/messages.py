@@ -31,6 +31,7 @@ __all__ = [
     "ActiveZones",
     "AlarmClear",
     "AlarmStop",
+    "LateNotice",
     "Leg",
     "Mark",
     "Piece",
@@ -311,3 +312,30 @@ class PositionReport:
     def describe(self) -> str:
         """Trace text (none)."""
         return ""
+
+
+@dataclass(frozen=True, slots=True)
+class LateNotice:
+    """The feeder's notice that a part is late (a
+    :class:`~workcell.sim.harness.faults.LatePart` fault), given to the
+    coordination at the part's expected arrival (at the start when that is
+    time 0).
+
+    Attributes
+    ----------
+    tasks : tuple of int
+        The tasks the part gates.
+    arrival : float
+        When it comes, seconds (``inf``: never).
+    part : str
+        The part's name.
+    """
+
+    tasks: tuple[int, ...]
+    arrival: float
+    part: str
+
+    def describe(self) -> str:
+        """Trace text."""
+        when = "never comes" if self.arrival == float("inf") else f"comes at {self.arrival:.6g} s"
+        return f"part {self.part!r} is late: {when}"

@@ -29,7 +29,6 @@ from workcell.sim.coordination.geometric import (
     blockers,
     check_departure,
     on_report,
-    stop_movers_for,
 )
 from workcell.sim.protocol.exchange import BackOffUntil, ComeBack, Detour, ReleaseHold
 
@@ -39,7 +38,7 @@ these functions are methods of (typed loosely: that module imports this one)."""
 
 # the arm's own check before it sets off, the book and the back-off order:
 # the centralized coordinator's
-__all__ = ["back_off", "blockers", "check_departure", "on_report", "stop_movers_for"]
+__all__ = ["back_off", "blockers", "check_departure", "on_report"]
 
 
 def arm_moved(self: _Self) -> None:

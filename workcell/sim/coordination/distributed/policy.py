@@ -54,8 +54,9 @@ from workcell.sim.coordination.geometric import initial_book
 from workcell.sim.coordination.guard import GeometryGuard
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
-from workcell.sim.protocol.exchange import ArmView, BackOffUntil, ControlChannel, Fail
-from workcell.sim.protocol.messages import Piece
+from workcell.sim.protocol.channel import ControlChannel
+from workcell.sim.protocol.exchange import ArmView, BackOffUntil, Fail
+from workcell.sim.protocol.messages import LateNotice, Piece
 from workcell.sim.protocol.peers import PEER_RECORDS, Activation, Alarm, Resource
 from workcell.sim.protocol.states import TASK_MACHINE, TaskState
 
@@ -112,6 +113,10 @@ class DistributedPolicy:
         """Per arm, the view it last reported (its peer reads its own arm
         there; the others' are their reports)."""
         self.away_until: dict[int, BackOffUntil] = {}
+        self.cleared: list[list[tuple[int, ArmView]]] = [[] for _ in compiled.cell.arms]
+        """Per arm, the departures cleared and not yet acknowledged (handed
+        over at the arm's own station: acknowledged at once)."""
+        self.failing: set[int] = set()
         self.seed = seed
         self.resolve_budget = float(resolve_budget)
         self.resolving = False
@@ -283,23 +288,21 @@ class DistributedPolicy:
         self.peers[a].from_peer(a, "wake_up", Alarm(stop, False))
         self.link.send(a + 1, BROADCAST, "wake_up", Alarm(stop, False))
 
-    def part_late(self, tasks: list[int], arrival: float, part: str) -> None:
+    def part_late(self, notice: LateNotice) -> None:
         """The feeder's notice reaches the peers of the gated tasks."""
-        self.parts_late([(tasks, arrival, part)])
+        self.parts_late([notice])
 
-    def parts_late(self, notices: Sequence[tuple[list[int], float, str]]) -> None:
-        """Parts found late at one instant, ``(tasks, arrival, part)`` each."""
-        for tasks, arrival, part in notices:
-            when = "never comes" if arrival == float("inf") else f"comes at {arrival:.6g} s"
-            self.trace.add(self.kernel.now, "fault", detail=f"part {part!r} is late: {when}")
-            for t in tasks:
-                self.peers[arm_of(self.p, self.plan, t)].part_late(t, arrival, part)
+    def parts_late(self, notices: Sequence[LateNotice]) -> None:
+        """Parts found late at one instant (one :class:`LateNotice` each)."""
+        for notice in notices:
+            self.trace.add(self.kernel.now, "fault", detail=notice.describe())
+            for t in notice.tasks:
+                self.peers[arm_of(self.p, self.plan, t)].part_late(t, notice.arrival, notice.part)
 
     # ------------------------------------------------------------ geometry (S2.12)
     on_report = geometry.on_report
     blockers = geometry.blockers
     check_departure = geometry.check_departure
-    stop_movers_for = geometry.stop_movers_for
     arm_moved = geometry.arm_moved
     _recheck = geometry.recheck
     _try_detour = geometry.try_detour
