@@ -32,6 +32,7 @@ from typing import Any, Literal
 import numpy as np
 
 from multiarm.errors import UsageError
+from scheduler import _ctrl_c
 from scheduler import result as _result
 from scheduler.greedy import GreedyOptions, solve_greedy
 from scheduler.problem import Problem, ProblemLike, as_problem
@@ -284,22 +285,25 @@ def solve(
 
     _result._LISTENER[0] = listener
     t0 = time.perf_counter()
-    try:
-        return bind_result(spec.run(problem, time_limit, seed, waits, options, extra), problem)
-    except KeyboardInterrupt:
-        # solvers that keep a best schedule return it themselves; here nothing was kept
-        stats = SearchStats(interrupted=True)
-        from scheduler.bounds import lower_bound
+    # Ctrl-C is noted for the whole solve, so that one whose KeyboardInterrupt
+    # is lost on the way still ends the search (scheduler._ctrl_c)
+    with _ctrl_c.guard():
+        try:
+            return bind_result(spec.run(problem, time_limit, seed, waits, options, extra), problem)
+        except KeyboardInterrupt:
+            # solvers that keep a best schedule return it themselves; here nothing was kept
+            stats = SearchStats(interrupted=True)
+            from scheduler.bounds import lower_bound
 
-        return Result(
-            SolveStatus.UNKNOWN,
-            None,
-            math.inf,
-            lower_bound(problem),
-            time.perf_counter() - t0,
-            solver,
-            seed,
-            stats,
-        )
-    finally:
-        _result._LISTENER[0] = None
+            return Result(
+                SolveStatus.UNKNOWN,
+                None,
+                math.inf,
+                lower_bound(problem),
+                time.perf_counter() - t0,
+                solver,
+                seed,
+                stats,
+            )
+        finally:
+            _result._LISTENER[0] = None

@@ -44,7 +44,7 @@ import numpy as np
 
 from multiarm.errors import UsageError
 from multiarm.types import FloatArray, IntArray
-from scheduler import exact
+from scheduler import _ctrl_c, exact
 from scheduler.bounds import heads_and_tails
 from scheduler.kernel import State, expand
 from scheduler.problem import Problem
@@ -315,10 +315,12 @@ def _portfolio_member(  # type: ignore[no-untyped-def]
 class _Race:
     """CP-SAT on one worker in a thread (it releases the GIL while searching)."""
 
-    def __init__(self, problem: Problem, waits: bool, seed: int, seconds: float) -> None:
+    def __init__(
+        self, problem: Problem, waits: bool, seed: int, seconds: float, done: _ctrl_c.StopEvent
+    ) -> None:
         import threading
 
-        self.done = threading.Event()
+        self.done = done
         """Set when CP-SAT proved the optimum (or infeasibility): the tree stops."""
         self._solver: Any = None
         self._stopped = False
@@ -328,14 +330,25 @@ class _Race:
         self._thread = threading.Thread(
             target=self._run, args=(problem, waits, seed, max(0.05, seconds)), daemon=True
         )
+        # a KeyboardInterrupt inside Thread.start may come after the thread
+        # exists but before it has its ident: whether it started is then
+        # unknown, and a thread taken for unstarted searched on to its time
+        # limit. The start is one piece (a Ctrl-C there is raised after it),
+        # and a thread started by an interrupted start ends at once (_keep).
         try:
-            self._thread.start()
+            with _ctrl_c.deferred():
+                self._thread.start()
+        except KeyboardInterrupt:  # Ctrl-C not noted by a guard: let it end itself
+            self._stopped = True
+            if self._thread.ident is not None:
+                self._wait_stopped()
+            raise
+        try:
             # let it build its model before the tree search takes the GIL (the
             # compiled kernel holds it through each call): the solve itself runs without it
             self._ready.wait(timeout=max(0.05, seconds))
         except KeyboardInterrupt:  # Ctrl-C before the tree search began: end CP-SAT too
-            if self._thread.ident is not None:  # it started (Ctrl-C may come inside start)
-                self._wait_stopped()
+            self._wait_stopped()
             raise
 
     def _run(self, problem: Problem, waits: bool, seed: int, seconds: float) -> None:
@@ -388,7 +401,8 @@ class _Race:
     def result(self) -> Result | None:
         """Stop CP-SAT if it still runs, and return its result."""
         self._wait_stopped()
-        self._thread.join()
+        with _ctrl_c.deferred():  # a KeyboardInterrupt inside join can mark it ended early
+            self._thread.join()
         return self._result
 
 
@@ -402,6 +416,18 @@ def solve_tree(
     start: Solution | None = None,
 ) -> Result:
     """The anytime tree search (see the module docstring)."""
+    with _ctrl_c.guard():
+        return _solve_tree(problem, time_limit, seed, waits, options, start)
+
+
+def _solve_tree(
+    problem: Problem,
+    time_limit: float | None,
+    seed: int,
+    waits: bool,
+    options: TreeOptions | None,
+    start: Solution | None,
+) -> Result:
     opt = options or TreeOptions()
     if problem.n_windows == 0 and problem.n_tools == 0 and problem.blocking is None:
         warm_up_graph()  # before the clock starts, as the kernel's own warm-up
@@ -433,7 +459,11 @@ def solve_tree(
     stats.extra["exact"] = "applicable" if can_prove else why
     race = None
     # a Ctrl-C anywhere from here on (also between the race's start and the
-    # search's own handler, or while the race is asked to end) ends CP-SAT too
+    # search's own handler, or while the race is asked to end) ends CP-SAT too;
+    # one whose KeyboardInterrupt was lost is still noted (scheduler._ctrl_c)
+    # and ends the search loops, which poll ``ev.stop``
+    ctrl_c = _ctrl_c.current()
+    stop = ev.stop = _ctrl_c.StopEvent(ctrl_c)
     try:
         if (
             time_limit is not None
@@ -442,8 +472,7 @@ def solve_tree(
             <= (opt.portfolio_fjsp_max_tasks if pure_fjsp(ev) else opt.portfolio_max_tasks)
             and (best is None or best.makespan > lb + 1e-9)
         ):
-            race = _Race(p, waits, seed, deadline - time.perf_counter())
-            ev.stop = race.done
+            race = _Race(p, waits, seed, deadline - time.perf_counter(), stop)
             can_prove = False  # CP-SAT is the proof here (measured faster than the exact B&B)
             stats.extra["exact"] = "left to the racing CP-SAT"
         members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
@@ -484,7 +513,7 @@ def solve_tree(
             return (
                 time.perf_counter() >= deadline
                 or (work_limit is not None and ev.evaluations >= work_limit)
-                or (race is not None and race.done.is_set())
+                or stop.is_set()  # CP-SAT's proof, or Ctrl-C
             )
 
         try:
@@ -498,7 +527,7 @@ def solve_tree(
                     if nodes is None and work_limit is not None:
                         nodes = 100 * work_limit
                     res = exact.branch_and_bound(
-                        p, best.makespan if best else math.inf, deadline, waits, nodes, ev.stop
+                        p, best.makespan if best else math.inf, deadline, waits, nodes, stop
                     )
                     stats.nodes += res.nodes
                     stats.pruned += res.pruned
@@ -579,6 +608,9 @@ def solve_tree(
                     break  # unlimited budget on a big problem: stop after a fair effort
         except KeyboardInterrupt:
             stats.interrupted = True  # Ctrl-C: keep the best schedule found so far
+        if ctrl_c.hit:  # also when its KeyboardInterrupt was lost on the way
+            stats.interrupted = True
+        if stats.interrupted:
             if race is not None:
                 race.stop()
             for member, _pipe in members:
@@ -641,7 +673,7 @@ def solve_tree(
                     proven = best.makespan <= cp.objective + 1e-9
                 elif cp.status is SolveStatus.INFEASIBLE:
                     proven = True
-        if best is None and not proven and opt.fallback and not stats.interrupted:
+        if best is None and not proven and opt.fallback and not (stats.interrupted or ctrl_c.hit):
             # no list order decodes (start zones dead-locking): ask CP-SAT within the budget left
             from scheduler.fallback import exact_fallback
 
