@@ -273,22 +273,22 @@ def solve(
         from dataclasses import replace
 
         options = replace(options or spec.options(), **legacy)  # type: ignore[type-var]
-    _warm_up()
-    listener = None
-    if progress is not None:
-        from scheduler.bounds import lower_bound
-
-        lb = lower_bound(problem)
-
-        def listener(t: float, objective: float) -> None:
-            progress(Progress(t, objective, min(lb, objective), solver))
-
-    _result._LISTENER[0] = listener
     t0 = time.perf_counter()
     # Ctrl-C is noted for the whole solve, so that one whose KeyboardInterrupt
     # is lost on the way still ends the search (scheduler._ctrl_c)
     with _ctrl_c.guard():
         try:
+            _warm_up()
+            listener = None
+            if progress is not None:
+                from scheduler.bounds import lower_bound
+
+                lb = lower_bound(problem)
+
+                def listener(t: float, objective: float) -> None:
+                    progress(Progress(t, objective, min(lb, objective), solver))
+
+            _result._LISTENER[0] = listener
             return bind_result(spec.run(problem, time_limit, seed, waits, options, extra), problem)
         except KeyboardInterrupt:
             # solvers that keep a best schedule return it themselves; here nothing was kept

@@ -40,17 +40,23 @@ CHILD = textwrap.dedent(
         before = set(threading.enumerate())
         sent = []
 
+        go = threading.Event()
+
         def kill():
+            go.wait()
+            time.sleep(delay)
             sent.append(time.perf_counter())
             os.kill(os.getpid(), signal.SIGINT)
 
-        timer = threading.Timer(delay, kill)
+        # the delay counts from the call (a Timer's could end inside its own start)
+        timer = threading.Thread(target=kill)
         timer.start()
+        go.set()
         r = solve(p, "tree", time_limit=60.0, seed=0)
         back = time.perf_counter()
         timer.join()
         while time.perf_counter() - back < 30.0:
-            left = [t for t in set(threading.enumerate()) - before if t.is_alive()]
+            left = list(set(threading.enumerate()) - before)  # listed until it has ended
             if not left:
                 break
             time.sleep(0.02)
