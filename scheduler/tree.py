@@ -38,7 +38,7 @@ import multiprocessing
 import os
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -52,6 +52,9 @@ from scheduler.result import Result, SearchStats, SolveStatus
 from scheduler.search import Evaluator, Solution, local_search, priority_order
 from scheduler.start import begin
 from scheduler.tabu import pure_fjsp, tabu_search, warm_up_graph
+
+if TYPE_CHECKING:
+    from scheduler.schedule import Schedule
 
 __all__ = ["TreeOptions", "beam_pass", "solve_tree"]
 
@@ -536,21 +539,13 @@ def _solve_tree(
                     )
                     if res.schedule is not None:
                         sched = res.schedule
-                        order = np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64)
-                        sol = ev.evaluate(order, sched.mode.copy())
+                        kept = _solution_of(sched, res.makespan)
+                        sol = ev.evaluate(kept.order, sched.mode.copy())
                         if sol is not None and sol.makespan <= res.makespan + 1e-9:
                             offer(sol)
                         else:  # the decoder cannot reproduce it: keep the exact schedule itself
                             stats.extra["exact_schedule"] = sched
-                            offer(
-                                Solution(
-                                    order,
-                                    sched.mode.copy(),
-                                    res.makespan,
-                                    float(sched.end.sum()),
-                                    None,
-                                )
-                            )
+                            offer(kept)
                     if res.complete:
                         proven = True
                         break
@@ -636,17 +631,10 @@ def _solve_tree(
                 from scheduler.schedule import Schedule
 
                 mk, w_mode, w_start, w_end, w_waits, w_blocking, found, _evals = got
-                stats.extra["worker_schedule"] = Schedule(
-                    w_mode, w_start, w_end, tuple(w_waits), w_blocking
-                )
+                sched = Schedule(w_mode, w_start, w_end, tuple(w_waits), w_blocking)
+                stats.extra["worker_schedule"] = sched
                 stats.record(found, mk)
-                best = Solution(
-                    np.lexsort((np.arange(p.n_tasks), w_start)).astype(np.int64),
-                    w_mode.copy(),
-                    mk,
-                    float(w_end.sum()),
-                    None,
-                )
+                best = _solution_of(sched, mk)
             if isinstance(got, tuple) and len(got) == 8:
                 stats.evaluations += int(got[7])
             elif isinstance(got, tuple) and got and got[0] == "error":
@@ -659,15 +647,8 @@ def _solve_tree(
                     best is None or cp.objective < best.makespan - 1e-9
                 ):
                     stats.record(time.perf_counter() - t0, cp.objective)
-                    sched = cp.schedule
-                    stats.extra["exact_schedule"] = sched
-                    best = Solution(
-                        np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64),
-                        sched.mode.copy(),
-                        cp.objective,
-                        float(sched.end.sum()),
-                        None,
-                    )
+                    stats.extra["exact_schedule"] = cp.schedule
+                    best = _solution_of(cp.schedule, cp.objective)
                 lb = max(lb, cp.bound)
                 if cp.status is SolveStatus.OPTIMAL and best is not None:
                     proven = best.makespan <= cp.objective + 1e-9
@@ -688,15 +669,8 @@ def _solve_tree(
             stats.nodes += fb.stats.nodes
             if fb.schedule is not None:
                 stats.record(time.perf_counter() - t0, fb.objective)
-                sched = fb.schedule
-                stats.extra["exact_schedule"] = sched
-                best = Solution(
-                    np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64),
-                    sched.mode.copy(),
-                    fb.objective,
-                    float(sched.end.sum()),
-                    None,
-                )
+                stats.extra["exact_schedule"] = fb.schedule
+                best = _solution_of(fb.schedule, fb.objective)
                 if fb.status is SolveStatus.OPTIMAL:
                     proven = True
             elif fb.status is SolveStatus.INFEASIBLE:
@@ -706,6 +680,15 @@ def _solve_tree(
         if race is not None:
             race.result()
         raise
+
+
+def _solution_of(sched: Schedule, makespan: float) -> Solution:
+    """A schedule found outside the list decoder (a worker process, CP-SAT, the
+    exact search) as a :class:`Solution`: its tasks in start order (ties by
+    index), its modes, ``makespan``, and no decoder state (``_finish`` then
+    keeps the schedule itself)."""
+    order = np.lexsort((np.arange(len(sched.start)), sched.start)).astype(np.int64)
+    return Solution(order, sched.mode.copy(), makespan, float(sched.end.sum()), None)
 
 
 def _finish(
