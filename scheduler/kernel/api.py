@@ -25,7 +25,7 @@ from multiarm.errors import UsageError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel._jit import jit_enabled
 from scheduler.kernel.arrays import Instance, State, compile_problem
-from scheduler.kernel.critical import _chain, critical_chain
+from scheduler.kernel.critical import _chain, cheapest_slot, critical_chain
 from scheduler.kernel.passes import (
     RESUME,
     _decode,
@@ -451,6 +451,7 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         decode_resume(inst, order, free, snaps, snaps, 0, every=every)
         copy_rows(snaps, new_snaps(inst, len(order), every), 0, 1)
         critical_chain(inst, st3)
+        cheapest_slot(inst, 0, 0, np.zeros(0, dtype=np.int64), 0, 0)  # the tabu search's
     _WARM = True
     spent = time.perf_counter() - t0
     log.debug("scheduler kernel ready in %.1f s", spent)
