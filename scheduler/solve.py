@@ -278,7 +278,10 @@ def solve(
     # is lost on the way still ends the search (scheduler._ctrl_c)
     with _ctrl_c.guard():
         try:
-            _warm_up()
+            # a KeyboardInterrupt inside numba's compiler can break its state
+            # for the rest of the process: a Ctrl-C there is raised after it
+            with _ctrl_c.deferred():
+                _warm_up()
             listener = None
             if progress is not None:
                 from scheduler.bounds import lower_bound

@@ -467,6 +467,7 @@ def _solve_tree(
     # and ends the search loops, which poll ``ev.stop``
     ctrl_c = _ctrl_c.current()
     stop = ev.stop = _ctrl_c.StopEvent(ctrl_c)
+    members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
     try:
         if (
             time_limit is not None
@@ -478,7 +479,6 @@ def _solve_tree(
             race = _Race(p, waits, seed, deadline - time.perf_counter(), stop)
             can_prove = False  # CP-SAT is the proof here (measured faster than the exact B&B)
             stats.extra["exact"] = "left to the racing CP-SAT"
-        members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
         remaining = deadline - time.perf_counter()
         daemon = multiprocessing.current_process().daemon  # e.g. a Dask worker: no children
         if daemon and opt.workers > 1:
@@ -633,8 +633,8 @@ def _solve_tree(
                 mk, w_mode, w_start, w_end, w_waits, w_blocking, found, _evals = got
                 sched = Schedule(w_mode, w_start, w_end, tuple(w_waits), w_blocking)
                 stats.extra["worker_schedule"] = sched
-                stats.record(found, mk)
                 best = _solution_of(sched, mk)
+                stats.record(found, mk)
             if isinstance(got, tuple) and len(got) == 8:
                 stats.evaluations += int(got[7])
             elif isinstance(got, tuple) and got and got[0] == "error":
@@ -646,9 +646,9 @@ def _solve_tree(
                 if cp.schedule is not None and (
                     best is None or cp.objective < best.makespan - 1e-9
                 ):
-                    stats.record(time.perf_counter() - t0, cp.objective)
                     stats.extra["exact_schedule"] = cp.schedule
                     best = _solution_of(cp.schedule, cp.objective)
+                    stats.record(time.perf_counter() - t0, cp.objective)
                 lb = max(lb, cp.bound)
                 if cp.status is SolveStatus.OPTIMAL and best is not None:
                     proven = best.makespan <= cp.objective + 1e-9
@@ -668,18 +668,26 @@ def _solve_tree(
             stats.extra["fallback"] = fb.status.value
             stats.nodes += fb.stats.nodes
             if fb.schedule is not None:
-                stats.record(time.perf_counter() - t0, fb.objective)
                 stats.extra["exact_schedule"] = fb.schedule
                 best = _solution_of(fb.schedule, fb.objective)
+                stats.record(time.perf_counter() - t0, fb.objective)
                 if fb.status is SolveStatus.OPTIMAL:
                     proven = True
             elif fb.status is SolveStatus.INFEASIBLE:
                 proven = True
         return _finish(p, ev, best, lb, t0, seed, stats, proven)
     except KeyboardInterrupt:
+        # Ctrl-C outside the search loop (the race's start, the collection of
+        # the workers' and CP-SAT's schedules, the fallback): end them, and
+        # keep the best schedule so far as the search loop does
         if race is not None:
             race.result()
-        raise
+        for member, _pipe in members:
+            member.terminate()
+            member.join(timeout=1.0)
+        stats.interrupted = True
+        stats.evaluations = stats.evaluations or ev.evaluations
+        return _finish(p, ev, best, lb, t0, seed, stats, proven)
 
 
 def _solution_of(sched: Schedule, makespan: float) -> Solution:

@@ -128,3 +128,33 @@ def test_a_ctrl_c_at_a_fragile_instant_is_honoured(case: str, solver: str) -> No
     assert int(left) == 0 and float(gone) < PROMPT, out
     if case == "finaliser":  # the search had a schedule when the Ctrl-C came: it is kept
         assert status == "feasible", out
+
+
+def test_a_ctrl_c_after_the_search_loop_keeps_the_best_schedule() -> None:
+    """Ctrl-C while the tree search collects the schedules found beside it
+    (here: the CP-SAT fallback's, on a problem no list order decodes) used to
+    end the solve with no schedule. A KeyboardInterrupt raised by the
+    ``progress`` hook at that schedule stands for it."""
+    from scheduler import Model, Progress, Window, solve
+    from scheduler.schedule import validate
+
+    m = Model("swap")  # each arm starts in the zone the other one's task needs
+    m.add_zone("ZA")
+    m.add_zone("ZB")
+    m.add_arm("A", start_zones=["ZA"])
+    m.add_arm("B", start_zones=["ZB"])
+    m.add_task("ta")
+    m.add_mode("ta", "A", 2.0, windows=[Window("ZB", 0.5, 1.5)])
+    m.add_task("tb")
+    m.add_mode("tb", "B", 2.0, windows=[Window("ZA", 0.5, 1.5)])
+    p = m.build()
+    seen: list[float] = []
+
+    def ctrl_c(progress: Progress) -> None:
+        seen.append(progress.objective)
+        raise KeyboardInterrupt
+
+    r = solve(p, "tree", time_limit=10.0, seed=0, progress=ctrl_c)
+    assert seen == [2.0]  # the fallback's schedule, the first the search found
+    assert r.stats.interrupted is True
+    assert r.schedule is not None and validate(p, r.schedule) == r.objective == 2.0
