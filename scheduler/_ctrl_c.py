@@ -7,14 +7,17 @@ lost a Ctrl-C during a tree search that races CP-SAT (about 1 instant in
 
 * **code that swallows the exception.** A KeyboardInterrupt raised inside
   a finaliser the garbage collector runs at that instant (``__del__``, a
-  weakref callback: "Exception ignored in ...") or inside a library that
-  catches broadly (seen in numba's compiler, which compiles a kernel the
-  first time a search reaches it) never reaches the search: it ran on to
-  its time limit and returned ``interrupted=False``;
+  ``weakref.finalize`` callback, of which numba's compiler makes many)
+  is printed as "Exception ignored in ..." and dropped: it never reached
+  the search, which ran on to its time limit and returned
+  ``interrupted=False``;
 * **code left half done.** Raised inside ``threading.Thread.start`` after
   the new thread exists but before it has set its ident, the racing CP-SAT
-  thread looked never started, was not stopped, and searched on to its
-  limit after the solve returned.
+  thread (or a CP-SAT solve's helper thread, :func:`scheduler.cpsat.run_solver`)
+  looked never started, was not stopped, and searched on to its limit after
+  the solve returned. Raised inside numba's compiler, it can leave the
+  compiler broken for the rest of the process (the kernel warm-up is
+  therefore a :func:`deferred` block).
 
 While a solve runs, :func:`guard` replaces Python's handler (only when it
 is Python's own, on the main thread) with one that first *notes* the
