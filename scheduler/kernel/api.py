@@ -437,6 +437,8 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         _code, st = decode(inst, order, free)
         decode(inst, order, free, chrono=True, waits=False, allowed=np.ones(p.n_modes, bool))
         expand(inst, inst.new_state(), order, np.asarray(p.mode_of[1], dtype=np.int64))
+        # the beam search's modes are a writable array: another compile
+        expand(inst, inst.new_state(), order, np.array(p.mode_of[1], dtype=np.int64))
         seq = np.zeros((p.n_arms, p.n_tasks), dtype=np.int64)
         seq_decode(inst, seq, np.zeros(p.n_arms, dtype=np.int64), st.t_mode)
         st2 = inst.new_state()
