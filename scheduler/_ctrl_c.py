@@ -15,7 +15,10 @@ lost a Ctrl-C during a tree search that races CP-SAT (about 1 instant in
   the new thread exists but before it has set its ident, the racing CP-SAT
   thread (or a CP-SAT solve's helper thread, :func:`scheduler.cpsat.run_solver`)
   looked never started, was not stopped, and searched on to its limit after
-  the solve returned. Raised inside numba's compiler, it can leave the
+  the solve returned. Raised inside ``threading.Condition.wait`` (under
+  every ``Event.wait``) while it takes its lock back, it left the lock
+  released, and the ``with`` around it raised ``RuntimeError: release
+  unlocked lock`` instead: the solve crashed. Raised inside numba's compiler, it can leave the
   compiler broken for the rest of the process (the kernel warm-up is
   therefore a :func:`deferred` block).
 
@@ -105,9 +108,11 @@ def guard() -> Iterator[CtrlC]:
 
 
 @contextmanager
-def deferred() -> Iterator[None]:
-    """A block a first Ctrl-C must not break in the middle of (e.g. a thread's
-    start): it is noted at once and raised as KeyboardInterrupt at the end."""
+def deferred(reraise: bool = True) -> Iterator[None]:
+    """A block a first Ctrl-C must not break in the middle of (a thread's
+    start, a wait on an Event): it is noted at once and raised as
+    KeyboardInterrupt at the end, or only noted (``reraise=False``: the block
+    reads :attr:`CtrlC.hit` itself)."""
     c = current()
     c._defer += 1
     try:
@@ -116,7 +121,8 @@ def deferred() -> Iterator[None]:
         c._defer -= 1
         if not c._defer and c._pending:
             c._pending = False
-            raise KeyboardInterrupt
+            if reraise:
+                raise KeyboardInterrupt
 
 
 class StopEvent(threading.Event):

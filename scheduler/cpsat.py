@@ -520,14 +520,17 @@ def _run_beside(solver: Any, solve: Callable[[], Any], ctrl_c: _ctrl_c.CtrlC) ->
     # join can mark a thread still running as stopped (Python 3.11, bpo-45274),
     # and the result would be read before the search ended. After Ctrl-C, ask
     # again until it ends (a stop asked before the search began is not kept).
-    while not done.is_set():
-        try:
-            interrupted = interrupted or ctrl_c.hit  # noted even if its exception was lost
-            if interrupted:
-                solver.stop_search()
-            done.wait(0.05)
-        except KeyboardInterrupt:
-            interrupted = True
+    # A first Ctrl-C is only noted here (raised inside Condition.wait while it
+    # takes its lock back, a KeyboardInterrupt breaks the lock: scheduler._ctrl_c)
+    with _ctrl_c.deferred(reraise=False):
+        while not done.is_set():
+            try:
+                interrupted = interrupted or ctrl_c.hit  # noted even if its exception was lost
+                if interrupted:
+                    solver.stop_search()
+                done.wait(0.05)
+            except KeyboardInterrupt:
+                interrupted = True
     if "error" in box:
         raise box["error"]
     return box["code"], interrupted

@@ -338,20 +338,22 @@ class _Race:
         # unknown, and a thread taken for unstarted searched on to its time
         # limit. The start is one piece (a Ctrl-C there is raised after it),
         # and a thread started by an interrupted start ends at once (_keep).
+        # The wait below is one piece too: raised inside Condition.wait while
+        # it takes its lock back, a KeyboardInterrupt became "RuntimeError:
+        # release unlocked lock"; a Ctrl-C there ends the wait instead.
+        ctrl_c = _ctrl_c.current()
         try:
             with _ctrl_c.deferred():
                 self._thread.start()
-        except KeyboardInterrupt:  # Ctrl-C not noted by a guard: let it end itself
-            self._stopped = True
+                # let it build its model before the tree search takes the GIL (the
+                # compiled kernel holds it through each call): the solve itself runs without it
+                end = time.perf_counter() + max(0.05, seconds)
+                while not (self._ready.wait(0.02) or ctrl_c.hit or time.perf_counter() >= end):
+                    pass
+        except KeyboardInterrupt:  # Ctrl-C before the tree search began: end CP-SAT too
+            self._stopped = True  # (a thread started by an interrupted start ends at once)
             if self._thread.ident is not None:
                 self._wait_stopped()
-            raise
-        try:
-            # let it build its model before the tree search takes the GIL (the
-            # compiled kernel holds it through each call): the solve itself runs without it
-            self._ready.wait(timeout=max(0.05, seconds))
-        except KeyboardInterrupt:  # Ctrl-C before the tree search began: end CP-SAT too
-            self._wait_stopped()
             raise
 
     def _run(self, problem: Problem, waits: bool, seed: int, seconds: float) -> None:
@@ -403,8 +405,10 @@ class _Race:
 
     def result(self) -> Result | None:
         """Stop CP-SAT if it still runs, and return its result."""
-        self._wait_stopped()
-        with _ctrl_c.deferred():  # a KeyboardInterrupt inside join can mark it ended early
+        # waits in one piece: a KeyboardInterrupt inside Event.wait can break
+        # its lock, and one inside join can mark the thread ended early
+        with _ctrl_c.deferred():
+            self._wait_stopped()
             self._thread.join()
         return self._result
 
