@@ -50,6 +50,7 @@ from typing import Any
 
 import numpy as np
 
+from scheduler import _ctrl_c
 from scheduler.problem import Problem
 from scheduler.result import Result, SolveStatus
 from scheduler.schedule import Schedule, ScheduleError, validate
@@ -462,6 +463,8 @@ def run_solver(solver: Any, model: Any, callback: Any = None) -> tuple[Any, bool
     ``interrupted=True`` with the status CP-SAT reached. On another thread
     (the tree search's racing CP-SAT) the main thread gets the
     KeyboardInterrupt and stops this search itself; ``interrupted`` is False.
+    A Ctrl-C noted by the solve's handler (:mod:`scheduler._ctrl_c`) stops the
+    search too when its KeyboardInterrupt was lost on the way.
 
     Parameters
     ----------
@@ -483,6 +486,14 @@ def run_solver(solver: Any, model: Any, callback: Any = None) -> tuple[Any, bool
 
     if threading.current_thread() is not threading.main_thread():
         return solve(), False
+    with _ctrl_c.guard() as ctrl_c:
+        return _run_beside(solver, solve, ctrl_c)
+
+
+def _run_beside(solver: Any, solve: Callable[[], Any], ctrl_c: _ctrl_c.CtrlC) -> tuple[Any, bool]:
+    """:func:`run_solver` on the main thread: the search in a helper thread."""
+    import threading
+
     box: dict[str, Any] = {}
     done = threading.Event()
 
@@ -497,7 +508,10 @@ def run_solver(solver: Any, model: Any, callback: Any = None) -> tuple[Any, bool
     worker = threading.Thread(target=run, name="cpsat-solve", daemon=True)
     interrupted = False
     try:
-        worker.start()
+        # in one piece: a KeyboardInterrupt inside Thread.start may come after
+        # the thread exists but before it has its ident (scheduler._ctrl_c)
+        with _ctrl_c.deferred():
+            worker.start()
     except KeyboardInterrupt:
         if worker.ident is None:  # it never started: nothing to stop
             raise
@@ -506,13 +520,17 @@ def run_solver(solver: Any, model: Any, callback: Any = None) -> tuple[Any, bool
     # join can mark a thread still running as stopped (Python 3.11, bpo-45274),
     # and the result would be read before the search ended. After Ctrl-C, ask
     # again until it ends (a stop asked before the search began is not kept).
-    while not done.is_set():
-        try:
-            if interrupted:
-                solver.stop_search()
-            done.wait(0.05)
-        except KeyboardInterrupt:
-            interrupted = True
+    # A first Ctrl-C is only noted here (raised inside Condition.wait while it
+    # takes its lock back, a KeyboardInterrupt breaks the lock: scheduler._ctrl_c)
+    with _ctrl_c.deferred(reraise=False):
+        while not done.is_set():
+            try:
+                interrupted = interrupted or ctrl_c.hit  # noted even if its exception was lost
+                if interrupted:
+                    solver.stop_search()
+                done.wait(0.05)
+            except KeyboardInterrupt:
+                interrupted = True
     if "error" in box:
         raise box["error"]
     return box["code"], interrupted

@@ -32,6 +32,7 @@ from typing import Any, Literal
 import numpy as np
 
 from multiarm.errors import UsageError
+from scheduler import _ctrl_c
 from scheduler import result as _result
 from scheduler.greedy import GreedyOptions, solve_greedy
 from scheduler.problem import Problem, ProblemLike, as_problem
@@ -272,34 +273,40 @@ def solve(
         from dataclasses import replace
 
         options = replace(options or spec.options(), **legacy)  # type: ignore[type-var]
-    _warm_up()
-    listener = None
-    if progress is not None:
-        from scheduler.bounds import lower_bound
-
-        lb = lower_bound(problem)
-
-        def listener(t: float, objective: float) -> None:
-            progress(Progress(t, objective, min(lb, objective), solver))
-
-    _result._LISTENER[0] = listener
     t0 = time.perf_counter()
-    try:
-        return bind_result(spec.run(problem, time_limit, seed, waits, options, extra), problem)
-    except KeyboardInterrupt:
-        # solvers that keep a best schedule return it themselves; here nothing was kept
-        stats = SearchStats(interrupted=True)
-        from scheduler.bounds import lower_bound
+    # Ctrl-C is noted for the whole solve, so that one whose KeyboardInterrupt
+    # is lost on the way still ends the search (scheduler._ctrl_c)
+    with _ctrl_c.guard():
+        try:
+            # a KeyboardInterrupt inside numba's compiler can break its state
+            # for the rest of the process: a Ctrl-C there is raised after it
+            with _ctrl_c.deferred():
+                _warm_up()
+            listener = None
+            if progress is not None:
+                from scheduler.bounds import lower_bound
 
-        return Result(
-            SolveStatus.UNKNOWN,
-            None,
-            math.inf,
-            lower_bound(problem),
-            time.perf_counter() - t0,
-            solver,
-            seed,
-            stats,
-        )
-    finally:
-        _result._LISTENER[0] = None
+                lb = lower_bound(problem)
+
+                def listener(t: float, objective: float) -> None:
+                    progress(Progress(t, objective, min(lb, objective), solver))
+
+            _result._LISTENER[0] = listener
+            return bind_result(spec.run(problem, time_limit, seed, waits, options, extra), problem)
+        except KeyboardInterrupt:
+            # solvers that keep a best schedule return it themselves; here nothing was kept
+            stats = SearchStats(interrupted=True)
+            from scheduler.bounds import lower_bound
+
+            return Result(
+                SolveStatus.UNKNOWN,
+                None,
+                math.inf,
+                lower_bound(problem),
+                time.perf_counter() - t0,
+                solver,
+                seed,
+                stats,
+            )
+        finally:
+            _result._LISTENER[0] = None

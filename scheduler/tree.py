@@ -38,13 +38,13 @@ import multiprocessing
 import os
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from multiarm.errors import UsageError
 from multiarm.types import FloatArray, IntArray
-from scheduler import exact
+from scheduler import _ctrl_c, exact
 from scheduler.bounds import heads_and_tails
 from scheduler.kernel import State, expand
 from scheduler.problem import Problem
@@ -52,6 +52,9 @@ from scheduler.result import Result, SearchStats, SolveStatus
 from scheduler.search import Evaluator, Solution, local_search, priority_order
 from scheduler.start import begin
 from scheduler.tabu import pure_fjsp, tabu_search, warm_up_graph
+
+if TYPE_CHECKING:
+    from scheduler.schedule import Schedule
 
 __all__ = ["TreeOptions", "beam_pass", "solve_tree"]
 
@@ -315,10 +318,12 @@ def _portfolio_member(  # type: ignore[no-untyped-def]
 class _Race:
     """CP-SAT on one worker in a thread (it releases the GIL while searching)."""
 
-    def __init__(self, problem: Problem, waits: bool, seed: int, seconds: float) -> None:
+    def __init__(
+        self, problem: Problem, waits: bool, seed: int, seconds: float, done: _ctrl_c.StopEvent
+    ) -> None:
         import threading
 
-        self.done = threading.Event()
+        self.done = done
         """Set when CP-SAT proved the optimum (or infeasibility): the tree stops."""
         self._solver: Any = None
         self._stopped = False
@@ -328,13 +333,26 @@ class _Race:
         self._thread = threading.Thread(
             target=self._run, args=(problem, waits, seed, max(0.05, seconds)), daemon=True
         )
+        # a KeyboardInterrupt inside Thread.start may come after the thread
+        # exists but before it has its ident: whether it started is then
+        # unknown, and a thread taken for unstarted searched on to its time
+        # limit. The start is one piece (a Ctrl-C there is raised after it),
+        # and a thread started by an interrupted start ends at once (_keep).
+        # The wait below is one piece too: raised inside Condition.wait while
+        # it takes its lock back, a KeyboardInterrupt became "RuntimeError:
+        # release unlocked lock"; a Ctrl-C there ends the wait instead.
+        ctrl_c = _ctrl_c.current()
         try:
-            self._thread.start()
-            # let it build its model before the tree search takes the GIL (the
-            # compiled kernel holds it through each call): the solve itself runs without it
-            self._ready.wait(timeout=max(0.05, seconds))
+            with _ctrl_c.deferred():
+                self._thread.start()
+                # let it build its model before the tree search takes the GIL (the
+                # compiled kernel holds it through each call): the solve itself runs without it
+                end = time.perf_counter() + max(0.05, seconds)
+                while not (self._ready.wait(0.02) or ctrl_c.hit or time.perf_counter() >= end):
+                    pass
         except KeyboardInterrupt:  # Ctrl-C before the tree search began: end CP-SAT too
-            if self._thread.ident is not None:  # it started (Ctrl-C may come inside start)
+            self._stopped = True  # (a thread started by an interrupted start ends at once)
+            if self._thread.ident is not None:
                 self._wait_stopped()
             raise
 
@@ -387,8 +405,11 @@ class _Race:
 
     def result(self) -> Result | None:
         """Stop CP-SAT if it still runs, and return its result."""
-        self._wait_stopped()
-        self._thread.join()
+        # waits in one piece: a KeyboardInterrupt inside Event.wait can break
+        # its lock, and one inside join can mark the thread ended early
+        with _ctrl_c.deferred():
+            self._wait_stopped()
+            self._thread.join()
         return self._result
 
 
@@ -402,6 +423,18 @@ def solve_tree(
     start: Solution | None = None,
 ) -> Result:
     """The anytime tree search (see the module docstring)."""
+    with _ctrl_c.guard():
+        return _solve_tree(problem, time_limit, seed, waits, options, start)
+
+
+def _solve_tree(
+    problem: Problem,
+    time_limit: float | None,
+    seed: int,
+    waits: bool,
+    options: TreeOptions | None,
+    start: Solution | None,
+) -> Result:
     opt = options or TreeOptions()
     if problem.n_windows == 0 and problem.n_tools == 0 and problem.blocking is None:
         warm_up_graph()  # before the clock starts, as the kernel's own warm-up
@@ -433,7 +466,12 @@ def solve_tree(
     stats.extra["exact"] = "applicable" if can_prove else why
     race = None
     # a Ctrl-C anywhere from here on (also between the race's start and the
-    # search's own handler, or while the race is asked to end) ends CP-SAT too
+    # search's own handler, or while the race is asked to end) ends CP-SAT too;
+    # one whose KeyboardInterrupt was lost is still noted (scheduler._ctrl_c)
+    # and ends the search loops, which poll ``ev.stop``
+    ctrl_c = _ctrl_c.current()
+    stop = ev.stop = _ctrl_c.StopEvent(ctrl_c)
+    members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
     try:
         if (
             time_limit is not None
@@ -442,11 +480,9 @@ def solve_tree(
             <= (opt.portfolio_fjsp_max_tasks if pure_fjsp(ev) else opt.portfolio_max_tasks)
             and (best is None or best.makespan > lb + 1e-9)
         ):
-            race = _Race(p, waits, seed, deadline - time.perf_counter())
-            ev.stop = race.done
+            race = _Race(p, waits, seed, deadline - time.perf_counter(), stop)
             can_prove = False  # CP-SAT is the proof here (measured faster than the exact B&B)
             stats.extra["exact"] = "left to the racing CP-SAT"
-        members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
         remaining = deadline - time.perf_counter()
         daemon = multiprocessing.current_process().daemon  # e.g. a Dask worker: no children
         if daemon and opt.workers > 1:
@@ -484,7 +520,7 @@ def solve_tree(
             return (
                 time.perf_counter() >= deadline
                 or (work_limit is not None and ev.evaluations >= work_limit)
-                or (race is not None and race.done.is_set())
+                or stop.is_set()  # CP-SAT's proof, or Ctrl-C
             )
 
         try:
@@ -498,7 +534,7 @@ def solve_tree(
                     if nodes is None and work_limit is not None:
                         nodes = 100 * work_limit
                     res = exact.branch_and_bound(
-                        p, best.makespan if best else math.inf, deadline, waits, nodes, ev.stop
+                        p, best.makespan if best else math.inf, deadline, waits, nodes, stop
                     )
                     stats.nodes += res.nodes
                     stats.pruned += res.pruned
@@ -507,21 +543,13 @@ def solve_tree(
                     )
                     if res.schedule is not None:
                         sched = res.schedule
-                        order = np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64)
-                        sol = ev.evaluate(order, sched.mode.copy())
+                        kept = _solution_of(sched, res.makespan)
+                        sol = ev.evaluate(kept.order, sched.mode.copy())
                         if sol is not None and sol.makespan <= res.makespan + 1e-9:
                             offer(sol)
                         else:  # the decoder cannot reproduce it: keep the exact schedule itself
                             stats.extra["exact_schedule"] = sched
-                            offer(
-                                Solution(
-                                    order,
-                                    sched.mode.copy(),
-                                    res.makespan,
-                                    float(sched.end.sum()),
-                                    None,
-                                )
-                            )
+                            offer(kept)
                     if res.complete:
                         proven = True
                         break
@@ -579,6 +607,9 @@ def solve_tree(
                     break  # unlimited budget on a big problem: stop after a fair effort
         except KeyboardInterrupt:
             stats.interrupted = True  # Ctrl-C: keep the best schedule found so far
+        if ctrl_c.hit:  # also when its KeyboardInterrupt was lost on the way
+            stats.interrupted = True
+        if stats.interrupted:
             if race is not None:
                 race.stop()
             for member, _pipe in members:
@@ -604,17 +635,10 @@ def solve_tree(
                 from scheduler.schedule import Schedule
 
                 mk, w_mode, w_start, w_end, w_waits, w_blocking, found, _evals = got
-                stats.extra["worker_schedule"] = Schedule(
-                    w_mode, w_start, w_end, tuple(w_waits), w_blocking
-                )
+                sched = Schedule(w_mode, w_start, w_end, tuple(w_waits), w_blocking)
+                stats.extra["worker_schedule"] = sched
+                best = _solution_of(sched, mk)
                 stats.record(found, mk)
-                best = Solution(
-                    np.lexsort((np.arange(p.n_tasks), w_start)).astype(np.int64),
-                    w_mode.copy(),
-                    mk,
-                    float(w_end.sum()),
-                    None,
-                )
             if isinstance(got, tuple) and len(got) == 8:
                 stats.evaluations += int(got[7])
             elif isinstance(got, tuple) and got and got[0] == "error":
@@ -626,22 +650,15 @@ def solve_tree(
                 if cp.schedule is not None and (
                     best is None or cp.objective < best.makespan - 1e-9
                 ):
+                    stats.extra["exact_schedule"] = cp.schedule
+                    best = _solution_of(cp.schedule, cp.objective)
                     stats.record(time.perf_counter() - t0, cp.objective)
-                    sched = cp.schedule
-                    stats.extra["exact_schedule"] = sched
-                    best = Solution(
-                        np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64),
-                        sched.mode.copy(),
-                        cp.objective,
-                        float(sched.end.sum()),
-                        None,
-                    )
                 lb = max(lb, cp.bound)
                 if cp.status is SolveStatus.OPTIMAL and best is not None:
                     proven = best.makespan <= cp.objective + 1e-9
                 elif cp.status is SolveStatus.INFEASIBLE:
                     proven = True
-        if best is None and not proven and opt.fallback and not stats.interrupted:
+        if best is None and not proven and opt.fallback and not (stats.interrupted or ctrl_c.hit):
             # no list order decodes (start zones dead-locking): ask CP-SAT within the budget left
             from scheduler.fallback import exact_fallback
 
@@ -655,25 +672,35 @@ def solve_tree(
             stats.extra["fallback"] = fb.status.value
             stats.nodes += fb.stats.nodes
             if fb.schedule is not None:
+                stats.extra["exact_schedule"] = fb.schedule
+                best = _solution_of(fb.schedule, fb.objective)
                 stats.record(time.perf_counter() - t0, fb.objective)
-                sched = fb.schedule
-                stats.extra["exact_schedule"] = sched
-                best = Solution(
-                    np.lexsort((np.arange(p.n_tasks), sched.start)).astype(np.int64),
-                    sched.mode.copy(),
-                    fb.objective,
-                    float(sched.end.sum()),
-                    None,
-                )
                 if fb.status is SolveStatus.OPTIMAL:
                     proven = True
             elif fb.status is SolveStatus.INFEASIBLE:
                 proven = True
         return _finish(p, ev, best, lb, t0, seed, stats, proven)
     except KeyboardInterrupt:
+        # Ctrl-C outside the search loop (the race's start, the collection of
+        # the workers' and CP-SAT's schedules, the fallback): end them, and
+        # keep the best schedule so far as the search loop does
         if race is not None:
             race.result()
-        raise
+        for member, _pipe in members:
+            member.terminate()
+            member.join(timeout=1.0)
+        stats.interrupted = True
+        stats.evaluations = stats.evaluations or ev.evaluations
+        return _finish(p, ev, best, lb, t0, seed, stats, proven)
+
+
+def _solution_of(sched: Schedule, makespan: float) -> Solution:
+    """A schedule found outside the list decoder (a worker process, CP-SAT, the
+    exact search) as a :class:`Solution`: its tasks in start order (ties by
+    index), its modes, ``makespan``, and no decoder state (``_finish`` then
+    keeps the schedule itself)."""
+    order = np.lexsort((np.arange(len(sched.start)), sched.start)).astype(np.int64)
+    return Solution(order, sched.mode.copy(), makespan, float(sched.end.sum()), None)
 
 
 def _finish(

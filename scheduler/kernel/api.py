@@ -25,7 +25,7 @@ from multiarm.errors import UsageError
 from multiarm.types import FloatArray, IntArray
 from scheduler.kernel._jit import jit_enabled
 from scheduler.kernel.arrays import Instance, State, compile_problem
-from scheduler.kernel.critical import _chain, critical_chain
+from scheduler.kernel.critical import _chain, cheapest_slot, critical_chain
 from scheduler.kernel.passes import (
     RESUME,
     _decode,
@@ -437,6 +437,8 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         _code, st = decode(inst, order, free)
         decode(inst, order, free, chrono=True, waits=False, allowed=np.ones(p.n_modes, bool))
         expand(inst, inst.new_state(), order, np.asarray(p.mode_of[1], dtype=np.int64))
+        # the beam search's modes are a writable array: another compile
+        expand(inst, inst.new_state(), order, np.array(p.mode_of[1], dtype=np.int64))
         seq = np.zeros((p.n_arms, p.n_tasks), dtype=np.int64)
         seq_decode(inst, seq, np.zeros(p.n_arms, dtype=np.int64), st.t_mode)
         st2 = inst.new_state()
@@ -451,6 +453,7 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         decode_resume(inst, order, free, snaps, snaps, 0, every=every)
         copy_rows(snaps, new_snaps(inst, len(order), every), 0, 1)
         critical_chain(inst, st3)
+        cheapest_slot(inst, 0, 0, np.zeros(0, dtype=np.int64), 0, 0)  # the tabu search's
     _WARM = True
     spent = time.perf_counter() - t0
     log.debug("scheduler kernel ready in %.1f s", spent)
