@@ -43,7 +43,10 @@ __all__ = [
     "ExactResult",
     "applicable",
     "branch_and_bound",
+    "Proof",
     "oracle_binding",
+    "prove",
+    "relevant_borders",
     "without_idle_oracle",
 ]
 
@@ -393,3 +396,429 @@ def branch_and_bound(
     return ExactResult(
         best_sched[0], best_mk[0], not stats["timeout"], int(stats["nodes"]), int(stats["pruned"])
     )
+
+
+@dataclass(frozen=True, slots=True)
+class Proof:
+    """The result of :func:`prove`.
+
+    Attributes
+    ----------
+    schedule : Schedule or None
+        The best schedule found (the incumbent given, if nothing better).
+    makespan : float
+        Its makespan (``inf`` when none).
+    bound : float
+        A lower bound of the optimum of the true problem: ``makespan`` when
+        ``proven``, else the root node's bound (or the ``lower`` given).
+    proven : bool
+        The search finished: ``makespan`` is the optimum (none below it by
+        more than 1e-9 s; with no schedule, none below ``upper``).
+    nodes : int
+        Search nodes visited (the deterministic work measure).
+    pruned : int
+        Nodes cut by their bound or an infeasible order.
+    seconds : float
+        Wall time.
+    reason : str
+        Why it stopped: ``"proven"``, ``"time"``, ``"nodes"``, ``"stopped"``,
+        or why the method does not apply (then nothing was searched).
+    """
+
+    schedule: Schedule | None
+    makespan: float
+    bound: float
+    proven: bool
+    nodes: int
+    pruned: int
+    seconds: float
+    reason: str
+
+
+def relevant_borders(problem: Problem, m: int, resources: frozenset[int]) -> tuple[float, ...]:
+    """The borders of mode ``m`` where a wait can matter: a window of a resource
+    in ``resources`` starts there, or it lies strictly inside such a movement
+    window. A wait at any other border can be moved to the next relevant one
+    (or dropped after the last) without lengthening any use of those
+    resources, the task or the schedule (see :mod:`scheduler.exact`)."""
+    sh = problem.shapes[m]
+    keep: set[float] = set()
+    for r, s, e in (*sh.exclusive, *sh.moves):
+        if r not in resources:
+            continue
+        if 0.0 < s < sh.duration:
+            keep.add(s)
+    for r, s, e in sh.moves:
+        if r in resources:
+            keep.update(b for b in sh.borders if s < b < e)
+    return tuple(b for b in sh.borders if b in keep)
+
+
+class _ModeData:
+    """Per mode: time points (start, relevant borders, end) and the intervals of
+    the essential resources, as offsets from those points."""
+
+    def __init__(self, problem: Problem, m: int, resources: frozenset[int], waits: bool) -> None:
+        sh = problem.shapes[m]
+        self.borders = relevant_borders(problem, m, resources) if waits else ()
+        P = [0.0, *self.borders, sh.duration]
+        self.P = P
+        self.n_pts = len(P)
+        self.duration = sh.duration
+        self.border_index = [sh.borders.index(b) for b in self.borders]
+
+        def closing(x: float) -> tuple[int, float]:  # last point strictly before x (end)
+            j = max(k for k in range(len(P) - 1) if P[k] < x or k == 0)
+            return j, x - P[j]
+
+        def opening(x: float) -> tuple[int, float]:  # last point at or before x (start)
+            j = max(k for k in range(len(P) - 1) if P[k] <= x)
+            return j, x - P[j]
+
+        iv: list[tuple[int, int, float, int, float, float, float]] = []
+        for r, s, e in sh.exclusive:
+            if r in resources:
+                j0, o0 = opening(s)
+                j1, o1 = closing(e)
+                iv.append((r, j0, o0, j1, o1, e - s, sh.duration - e))
+        for r, s, e in sh.moves:
+            if r in resources:
+                cuts = [s, *(b for b in self.borders if s < b < e), e]
+                for a0, a1 in zip(cuts[:-1], cuts[1:], strict=True):
+                    j0, o0 = opening(a0)
+                    j1, o1 = closing(a1)
+                    iv.append((r, j0, o0, j1, o1, a1 - a0, sh.duration - a1))
+        for r in sh.tools:
+            if r in resources:
+                iv.append((r, 0, 0.0, len(P) - 1, 0.0, sh.duration, 0.0))
+        self.intervals = iv
+
+
+def prove(
+    problem: Problem,
+    time_limit: float | None = None,
+    max_nodes: int | None = None,
+    *,
+    incumbent: Schedule | None = None,
+    upper: float = math.inf,
+    lower: float = 0.0,
+    waits: bool = True,
+    progress: Any = None,
+    progress_every: float = 10.0,
+    stop: Any = None,
+) -> Proof:
+    """Prove the optimum by branch and bound (the exact method for compiled cells).
+
+    The problem is first reduced without changing its optimum (see the module
+    docstring): an idle blocking oracle is dropped (:func:`without_idle_oracle`),
+    dominated resources are left out
+    (:func:`scheduler.cpsat.essential_resources`) and only the borders where
+    a wait can matter get a time point (:func:`relevant_borders`). The search
+    then fixes a mode per task, then orders conflicting pairs (tasks of one
+    arm, intervals of different arms in one resource), pruning a node whose
+    bound (:func:`scheduler.kernel.exact_bb.node_bound`) reaches the best
+    makespan so far.
+
+    Parameters
+    ----------
+    problem : Problem
+    time_limit : float or None
+        Wall-clock limit, seconds (None: none).
+    max_nodes : int or None
+        Deterministic work limit: stop after this many nodes.
+    incumbent : Schedule or None
+        A valid schedule to start from (e.g. the tree search's plan): only
+        better ones are searched for, and its modes and start order are
+        tried first. It is validated here.
+    upper : float
+        Search only for schedules shorter than this.
+    lower : float
+        A known lower bound of the optimum (e.g. :func:`scheduler.reference.best_bound`):
+        the search stops as soon as a schedule meets it, and the bound reported
+        is at least it.
+    waits : bool
+        Whether arms may wait at zone borders (as :func:`scheduler.validate` allows).
+    progress : callable or None
+        Called with a one-line status every ``progress_every`` seconds.
+    stop : threading.Event or None
+        Stop early once set.
+
+    Returns
+    -------
+    Proof
+
+    Examples
+    --------
+    >>> from scheduler import solve, validate
+    >>> from scheduler.generate import random_problem
+    >>> p = random_problem(2, 6, 2, 1, seed=1)
+    >>> res = prove(p, time_limit=60)
+    >>> res.proven, validate(p, res.schedule) == res.makespan
+    (True, True)
+    >>> res.makespan <= solve(p, "tree", time_limit=1, seed=0).objective
+    True
+    """
+    from scheduler.cpsat import essential_resources
+    from scheduler.kernel import exact_bb as kb
+    from scheduler.schedule import validate
+
+    t0 = time.perf_counter()
+    deadline = math.inf if time_limit is None else t0 + time_limit
+    p = without_idle_oracle(problem)
+    ok, why = applicable(p, max_tasks=10**9)
+    if not ok:
+        return Proof(None, math.inf, lower, False, 0, 0, 0.0, why)
+    T = p.n_tasks
+    best_mk = upper
+    best_sched: Schedule | None = None
+    inc_start = np.zeros(T)
+    inc_mode = [-1] * T
+    if incumbent is not None:
+        mk = validate(problem, incumbent)
+        inc_start = np.asarray(incumbent.start, dtype=float)
+        inc_mode = [int(m) for m in incumbent.mode]
+        if mk < best_mk:
+            best_mk, best_sched = mk, incumbent
+    if T == 0:
+        return Proof(Schedule.from_starts(p, [], []), 0.0, 0.0, True, 0, 0, 0.0, "proven")
+    resources = essential_resources(p)
+    modes = [_ModeData(p, m, resources, waits) for m in range(p.n_modes)]
+    mind = p.min_duration()
+    tails = np.zeros(T)
+    for t in reversed(p.topological_order):
+        for s in p.task_succs[t]:
+            tails[t] = max(tails[t], mind[s] + tails[s])
+    base = np.zeros(T, dtype=np.int64)
+    n_pts = 1
+    for t in range(T):
+        base[t] = n_pts
+        n_pts += max(modes[m].n_pts for m in p.task_modes[t])
+    n_iv = sum(max(len(modes[m].intervals) for m in p.task_modes[t]) for t in range(T))
+    # every branch adds one edge per pair of intervals or tasks, at most once on a path
+    max_edges = 4 * n_pts + 2 * len(p.task_preds) + sum(map(len, p.task_preds))
+    max_edges += n_iv * n_iv + T * T + 64
+    head = np.full(n_pts, -1, dtype=np.int64)
+    nxt = np.zeros(max_edges, dtype=np.int64)
+    src = np.zeros(max_edges, dtype=np.int64)
+    dst = np.zeros(max_edges, dtype=np.int64)
+    wt = np.zeros(max_edges)
+    ne = np.zeros(1, dtype=np.int64)
+    dist = np.zeros(n_pts)
+    stack = np.zeros(4 * n_pts + 16, dtype=np.int64)
+    mode_of = [-1] * T
+    stats = {"nodes": 0, "pruned": 0}
+    reason = [""]
+    last_report = [t0]
+    node_limit = math.inf if max_nodes is None else max_nodes
+
+    def add(u: int, v: int, w: float) -> bool:
+        if ne[0] >= len(src):
+            raise RuntimeError("edge store full")  # pragma: no cover - sized above
+        return bool(kb.stn_add(head, nxt, src, dst, wt, ne, dist, stack, u, v, w))
+
+    def exhausted() -> bool:
+        if reason[0]:
+            return True
+        now = time.perf_counter()
+        if now > deadline:
+            reason[0] = "time"
+        elif stats["nodes"] >= node_limit:
+            reason[0] = "nodes"
+        elif stop is not None and stop.is_set():
+            reason[0] = "stopped"
+        elif best_mk <= lower + _EPS:
+            reason[0] = "met the lower bound"
+        if progress is not None and now - last_report[0] >= progress_every:
+            last_report[0] = now
+            progress(
+                f"exact: {now - t0:.0f} s, {stats['nodes']:,} nodes, "
+                f"{stats['pruned']:,} pruned, best {best_mk:.3f}"
+            )
+        return bool(reason[0])
+
+    def end_pt(t: int) -> int:
+        return int(base[t]) + modes[mode_of[t]].n_pts - 1
+
+    # ---- phase 2 arrays (filled when every mode is fixed)
+    def phase2_arrays() -> dict[str, Any]:
+        t_start = base.copy()
+        t_end = np.array([end_pt(t) for t in range(T)], dtype=np.int64)
+        t_arm = np.array([int(p.mode_arm[mode_of[t]]) for t in range(T)], dtype=np.int64)
+        t_dur = np.array([modes[mode_of[t]].duration for t in range(T)])
+        setup = np.full((T, T), np.inf)
+        for x in range(T):
+            for y in range(T):
+                if x != y and t_arm[x] == t_arm[y]:
+                    setup[x, y] = p.setup_time(int(t_arm[x]), x, y)
+        t_setin = np.zeros(T)
+        for t in range(T):
+            ins = [setup[x, t] for x in range(T) if x != t and t_arm[x] == t_arm[t]]
+            t_setin[t] = min(ins) if ins else 0.0
+        rows: list[tuple[int, int, int, float, int, float, float, float]] = []
+        for t in range(T):
+            md = modes[mode_of[t]]
+            for r, j0, o0, j1, o1, ln, tl in md.intervals:
+                rows.append((r, t, int(base[t]) + j0, o0, int(base[t]) + j1, o1, ln, tl))
+        rows.sort(key=lambda x: (x[0], x[2], x[1]))
+        lo = [0]
+        for k in range(1, len(rows)):
+            if rows[k][0] != rows[k - 1][0]:
+                lo.append(k)
+        lo.append(len(rows))
+        n = max(len(rows), T) + 1
+        return {
+            "t_start": t_start,
+            "t_end": t_end,
+            "t_arm": t_arm,
+            "t_dur": t_dur,
+            "t_tail": tails.copy(),
+            "t_setin": t_setin,
+            "setup": setup,
+            "i_lo": np.array(lo if rows else [0], dtype=np.int64),
+            "i_task": np.array([x[1] for x in rows], dtype=np.int64),
+            "i_ps": np.array([x[2] for x in rows], dtype=np.int64),
+            "i_os": np.array([x[3] for x in rows]),
+            "i_pe": np.array([x[4] for x in rows], dtype=np.int64),
+            "i_oe": np.array([x[5] for x in rows]),
+            "i_len": np.array([x[6] for x in rows]),
+            "i_tail": np.array([x[7] for x in rows]),
+            "h": np.zeros(n),
+            "ln": np.zeros(n),
+            "tl": np.zeros(n),
+            "ex": np.zeros(n),
+            "out": np.zeros(6),
+        }
+
+    def bound2(a: dict[str, Any]) -> float:
+        return float(
+            kb.node_bound(
+                dist, a["t_start"], a["t_end"], a["t_arm"], a["t_dur"], a["t_tail"],
+                a["t_setin"], p.n_arms, a["i_lo"], a["i_task"], a["i_ps"], a["i_os"],
+                a["i_len"], a["i_tail"], a["h"], a["ln"], a["tl"], a["ex"],
+            )
+        )  # fmt: skip
+
+    def record() -> None:
+        nonlocal best_mk, best_sched
+        mk = max(float(dist[end_pt(t)]) for t in range(T))
+        if mk >= best_mk - _EPS:
+            return
+        starts = [float(dist[base[t]]) for t in range(T)]
+        ws = []
+        for t in range(T):
+            md = modes[mode_of[t]]
+            w = np.zeros(len(p.shapes[mode_of[t]].borders))
+            for j in range(1, md.n_pts - 1):
+                gap = dist[base[t] + j] - dist[base[t] + j - 1] - (md.P[j] - md.P[j - 1])
+                w[md.border_index[j - 1]] = max(0.0, float(gap))
+            ws.append(w)
+        sched = Schedule.from_starts(p, list(mode_of), starts, ws)
+        best_mk = validate(problem, sched)
+        best_sched = sched
+
+    def disjunctive(a: dict[str, Any]) -> None:
+        if exhausted():
+            return
+        stats["nodes"] += 1
+        if bound2(a) >= best_mk - _EPS:
+            stats["pruned"] += 1
+            return
+        out = a["out"]
+        if not kb.conflict(
+            dist, a["t_start"], a["t_end"], a["t_arm"], a["setup"], a["i_lo"], a["i_task"],
+            a["i_ps"], a["i_os"], a["i_pe"], a["i_oe"], out,
+        ):  # fmt: skip
+            record()
+            return
+        b1 = (int(out[0]), int(out[1]), float(out[4]))
+        b2 = (int(out[2]), int(out[3]), float(out[5]))
+        # the incumbent's order first: the branch whose later point comes later there
+        tx = int(np.searchsorted(base, b1[0], side="right")) - 1
+        ty = int(np.searchsorted(base, b1[1], side="right")) - 1
+        if inc_start[ty] < inc_start[tx]:
+            b1, b2 = b2, b1
+        for u, v, w in (b1, b2):
+            saved = dist.copy()
+            keep = int(ne[0])
+            if add(u, v, w):
+                disjunctive(a)
+            else:
+                stats["pruned"] += 1
+            kb.stn_pop(head, nxt, src, ne, keep)
+            dist[:] = saved
+            if reason[0]:
+                return
+
+    order = list(p.topological_order)
+
+    def bound1(i: int) -> float:
+        b = 0.0
+        load = np.zeros(p.n_arms)
+        first = np.full(p.n_arms, np.inf)
+        for t in order[:i]:
+            b = max(b, float(dist[end_pt(t)]) + tails[t])
+            arm = int(p.mode_arm[mode_of[t]])
+            load[arm] += modes[mode_of[t]].duration
+            first[arm] = min(first[arm], float(dist[base[t]]))
+        for arm in range(p.n_arms):
+            if load[arm] > 0:
+                b = max(b, first[arm] + load[arm])
+        return b
+
+    def choose(i: int) -> None:
+        if exhausted():
+            return
+        if i == T:
+            disjunctive(phase2_arrays())
+            return
+        t = order[i]
+        cands = sorted(p.task_modes[t], key=lambda m: (m != inc_mode[t], p.mode_duration[m]))
+        for m in cands:
+            stats["nodes"] += 1
+            md = modes[m]
+            mode_of[t] = m
+            arm = int(p.mode_arm[m])
+            saved = dist.copy()
+            keep = int(ne[0])
+            first = int(base[t])
+            release = max(
+                float(p.task_release[t]), float(p.arm_available[arm]) + p.setup_time(arm, -1, t)
+            )
+            ok = add(0, first, release)
+            for j in range(1, md.n_pts):
+                step = md.P[j] - md.P[j - 1]
+                ok = add(first + j - 1, first + j, step) and ok
+                if j == md.n_pts - 1:  # no wait at the end: the task ends on time
+                    ok = add(first + j, first + j - 1, -step) and ok
+            for q in p.task_preds[t]:
+                ok = add(end_pt(q), first, 0.0) and ok
+            if ok and bound1(i + 1) < best_mk - _EPS:
+                choose(i + 1)
+            else:
+                stats["pruned"] += 1
+            kb.stn_pop(head, nxt, src, ne, keep)
+            dist[:] = saved
+            mode_of[t] = -1
+            if reason[0]:
+                return
+
+    choose(0)
+    proven = not reason[0] or reason[0] == "met the lower bound"
+    bound = best_mk if proven else max(lower, float(lower_bound_of(p)))
+    return Proof(
+        best_sched,
+        best_mk,
+        bound,
+        proven,
+        int(stats["nodes"]),
+        int(stats["pruned"]),
+        time.perf_counter() - t0,
+        "proven" if proven else reason[0],
+    )
+
+
+def lower_bound_of(problem: Problem) -> float:
+    """:func:`scheduler.lower_bound` (imported late: it imports this module's users)."""
+    from scheduler.bounds import lower_bound
+
+    return float(lower_bound(problem))

@@ -1,0 +1,214 @@
+"""Compiled pieces of the exact branch and bound (:func:`scheduler.exact.prove`).
+
+A simple temporal network (STN) kept as arrays: time points, edges
+``x[v] >= x[u] + w`` in per-source linked lists, earliest times ``dist``
+(longest paths from the origin, point 0). An edge is added with
+:func:`stn_add` (incremental label correcting from its head; a positive
+cycle, i.e. an infeasible branch, shows as the edge's own tail growing) and
+edges are removed last-in first-out with :func:`stn_pop`. :func:`conflict`
+finds the pair of orders to branch on and :func:`node_bound` the node's lower
+bound (see :mod:`scheduler.exact` for why each is exact).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from scheduler.kernel._jit import njit
+
+__all__ = ["conflict", "node_bound", "stn_add", "stn_pop"]
+
+_EPS = 1e-9
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def stn_add(
+    head: Any, nxt: Any, src: Any, dst: Any, wt: Any, ne: Any, dist: Any, stack: Any,
+    u: int, v: int, w: float,
+) -> bool:  # pragma: no cover - compiled
+    """Add ``x[v] >= x[u] + w`` (edge number ``ne[0]``); False on a positive cycle.
+
+    The edge stays in either case (pop it with :func:`stn_pop`)."""
+    e = ne[0]
+    src[e] = u
+    dst[e] = v
+    wt[e] = w
+    nxt[e] = head[u]
+    head[u] = e
+    ne[0] = e + 1
+    if dist[u] + w <= dist[v] + _EPS:
+        return True
+    dist[v] = dist[u] + w
+    top = 0
+    stack[top] = v
+    top += 1
+    count = 0
+    limit = 4 * len(dist) * len(dist) + 100
+    while top > 0:
+        top -= 1
+        x = stack[top]
+        dx = dist[x]
+        f = head[x]
+        while f >= 0:
+            y = dst[f]
+            if dx + wt[f] > dist[y] + _EPS:
+                if y == u:
+                    return False
+                dist[y] = dx + wt[f]
+                if top >= len(stack):
+                    return False
+                stack[top] = y
+                top += 1
+                count += 1
+                if count > limit:
+                    return False
+            f = nxt[f]
+    return True
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def stn_pop(head: Any, nxt: Any, src: Any, ne: Any, keep: int) -> None:  # pragma: no cover
+    """Remove the edges added after the first ``keep`` (last in, first out)."""
+    e = ne[0] - 1
+    while e >= keep:
+        head[src[e]] = nxt[e]
+        e -= 1
+    ne[0] = keep
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def conflict(
+    dist: Any,
+    t_start: Any, t_end: Any, t_arm: Any, setup: Any,
+    i_lo: Any, i_task: Any, i_ps: Any, i_os: Any, i_pe: Any, i_oe: Any,
+    out: Any,
+) -> int:  # pragma: no cover - compiled
+    """The conflict to branch on at the earliest times ``dist``; 0 when none.
+
+    Tasks ``t`` (start point ``t_start[t]``, end point ``t_end[t]``, arm
+    ``t_arm[t]``; ``setup[t, t']`` the travel between them, ``inf`` across
+    arms) conflict when both orders are violated; intervals (grouped by
+    resource: group ``g`` is ``i_lo[g]:i_lo[g+1]``, each from point
+    ``i_ps`` plus ``i_os`` to point ``i_pe`` plus ``i_oe``) of tasks of
+    different arms conflict when they overlap. The one picked is the
+    earliest (smallest start of the pair's later interval, then the largest
+    overlap). ``out`` receives ``u1, v1, u2, v2`` and ``w1, w2`` at
+    ``out[4:6]``: branch 1 adds ``x[v1] >= x[u1] + w1``, branch 2 the other.
+    Returns 1 when a conflict was found.
+    """
+    found = 0
+    best_key = np.inf
+    best_ov = -1.0
+    T = len(t_start)
+    for x in range(T):
+        for y in range(x + 1, T):
+            if t_arm[x] != t_arm[y]:
+                continue
+            sx = dist[t_start[x]]
+            ex = dist[t_end[x]]
+            sy = dist[t_start[y]]
+            ey = dist[t_end[y]]
+            a = ex + setup[x, y]
+            b = ey + setup[y, x]
+            if sy < a - _EPS and sx < b - _EPS:
+                key = max(sx, sy)
+                ov = min(a - sy, b - sx)
+                if key < best_key - _EPS or (key < best_key + _EPS and ov > best_ov):
+                    best_key = key
+                    best_ov = ov
+                    found = 1
+                    out[0] = t_end[x]
+                    out[1] = t_start[y]
+                    out[4] = setup[x, y]
+                    out[2] = t_end[y]
+                    out[3] = t_start[x]
+                    out[5] = setup[y, x]
+    G = len(i_lo) - 1
+    for g in range(G):
+        for i in range(i_lo[g], i_lo[g + 1]):
+            s1 = dist[i_ps[i]] + i_os[i]
+            e1 = dist[i_pe[i]] + i_oe[i]
+            for j in range(i + 1, i_lo[g + 1]):
+                if t_arm[i_task[i]] == t_arm[i_task[j]]:
+                    continue
+                s2 = dist[i_ps[j]] + i_os[j]
+                e2 = dist[i_pe[j]] + i_oe[j]
+                if s1 < e2 - _EPS and s2 < e1 - _EPS:
+                    key = max(s1, s2)
+                    ov = min(e1, e2) - key
+                    if key < best_key - _EPS or (key < best_key + _EPS and ov > best_ov):
+                        best_key = key
+                        best_ov = ov
+                        found = 1
+                        out[0] = i_pe[i]
+                        out[1] = i_ps[j]
+                        out[4] = i_oe[i] - i_os[j]
+                        out[2] = i_pe[j]
+                        out[3] = i_ps[i]
+                        out[5] = i_oe[j] - i_os[i]
+    return found
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def _one_machine(head: Any, length: Any, tail: Any, extra: Any, n: int) -> float:  # pragma: no cover
+    """``max_k head_k + sum_{head_j >= head_k} (length_j + extra_j) - max extra_j
+    + min tail_j`` over the first ``n`` items: a one-machine bound (each
+    item's ``extra``, a least travel before it, counted for all but one)."""
+    if n == 0:
+        return 0.0
+    order = np.argsort(head[:n])
+    best = 0.0
+    total = 0.0
+    mt = np.inf
+    mx = 0.0
+    for k in range(n - 1, -1, -1):
+        i = order[k]
+        total += length[i] + extra[i]
+        mt = min(mt, tail[i])
+        mx = max(mx, extra[i])
+        best = max(best, head[i] + total - mx + mt)
+    return best
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def node_bound(
+    dist: Any,
+    t_start: Any, t_end: Any, t_arm: Any, t_dur: Any, t_tail: Any, t_setin: Any, n_arms: int,
+    i_lo: Any, i_task: Any, i_ps: Any, i_os: Any, i_len: Any, i_tail: Any,
+    h: Any, ln: Any, tl: Any, ex: Any,
+) -> float:  # pragma: no cover - compiled
+    """A lower bound of every completion of the node (see :mod:`scheduler.exact`).
+
+    The largest of: each task's earliest end plus its tail; per arm, the
+    one-machine bound of its tasks (earliest starts, nominal durations, least
+    travel into each, tails); per resource group, the one-machine bound of
+    its intervals (earliest starts, nominal lengths, the rest of the task
+    after the interval plus the task's tail).
+    """
+    T = len(t_start)
+    best = 0.0
+    for t in range(T):
+        best = max(best, dist[t_end[t]] + t_tail[t])
+    for a in range(n_arms):
+        n = 0
+        for t in range(T):
+            if t_arm[t] == a:
+                h[n] = dist[t_start[t]]
+                ln[n] = t_dur[t]
+                tl[n] = t_tail[t]
+                ex[n] = t_setin[t]
+                n += 1
+        best = max(best, _one_machine(h, ln, tl, ex, n))
+    G = len(i_lo) - 1
+    for g in range(G):
+        n = 0
+        for i in range(i_lo[g], i_lo[g + 1]):
+            h[n] = dist[i_ps[i]] + i_os[i]
+            ln[n] = i_len[i]
+            tl[n] = i_tail[i] + t_tail[i_task[i]]
+            ex[n] = 0.0
+            n += 1
+        best = max(best, _one_machine(h, ln, tl, ex, n))
+    return best
