@@ -29,8 +29,10 @@ true of travel times), so that an arm's pairwise orders imply its sequence.
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -41,9 +43,9 @@ from scheduler.schedule import Schedule
 
 __all__ = [
     "ExactResult",
+    "Proof",
     "applicable",
     "branch_and_bound",
-    "Proof",
     "oracle_binding",
     "prove",
     "relevant_borders",
@@ -443,7 +445,7 @@ def relevant_borders(problem: Problem, m: int, resources: frozenset[int]) -> tup
     resources, the task or the schedule (see :mod:`scheduler.exact`)."""
     sh = problem.shapes[m]
     keep: set[float] = set()
-    for r, s, e in (*sh.exclusive, *sh.moves):
+    for r, s, _ in (*sh.exclusive, *sh.moves):
         if r not in resources:
             continue
         if 0.0 < s < sh.duration:
@@ -484,7 +486,7 @@ class _ModeData:
         for r, s, e in sh.moves:
             if r in resources:
                 cuts = [s, *(b for b in self.borders if s < b < e), e]
-                for a0, a1 in zip(cuts[:-1], cuts[1:], strict=True):
+                for a0, a1 in itertools.pairwise(cuts):
                     j0, o0 = opening(a0)
                     j1, o1 = closing(a1)
                     iv.append((r, j0, o0, j1, o1, a1 - a0, sh.duration - a1))
@@ -506,6 +508,8 @@ def prove(
     progress: Any = None,
     progress_every: float = 10.0,
     stop: Any = None,
+    cap_step: float | None = None,
+    modes: Sequence[int] | None = None,
 ) -> Proof:
     """Prove the optimum by branch and bound (the exact method for compiled cells).
 
@@ -560,6 +564,7 @@ def prove(
     """
     from scheduler.cpsat import essential_resources
     from scheduler.kernel import exact_bb as kb
+    from scheduler.overlap import overlap_caps
     from scheduler.schedule import validate
 
     t0 = time.perf_counter()
@@ -582,18 +587,29 @@ def prove(
     if T == 0:
         return Proof(Schedule.from_starts(p, [], []), 0.0, 0.0, True, 0, 0, 0.0, "proven")
     resources = essential_resources(p)
-    modes = [_ModeData(p, m, resources, waits) for m in range(p.n_modes)]
+    shape = [_ModeData(p, m, resources, waits) for m in range(p.n_modes)]
     mind = p.min_duration()
     tails = np.zeros(T)
     for t in reversed(p.topological_order):
         for s in p.task_succs[t]:
             tails[t] = max(tails[t], mind[s] + tails[s])
+    # the overlap caps (an upper bound on the time two modes of different arms
+    # progress at once); pairs sharing no resource: the shorter duration
+    mode_cap = np.zeros((p.n_modes, p.n_modes))
+    for m1 in range(p.n_modes):
+        for m2 in range(p.n_modes):
+            if p.mode_arm[m1] != p.mode_arm[m2]:
+                mode_cap[m1, m2] = min(p.mode_duration[m1], p.mode_duration[m2])
+    caps = overlap_caps(p, step=cap_step)
+    for (m1, m2), po in (caps or {}).items():
+        mode_cap[m1, m2] = mode_cap[m2, m1] = min(mode_cap[m1, m2], po.cap)
+    scratch = [np.zeros(T + 1) for _ in range(4)]
     base = np.zeros(T, dtype=np.int64)
     n_pts = 1
     for t in range(T):
         base[t] = n_pts
-        n_pts += max(modes[m].n_pts for m in p.task_modes[t])
-    n_iv = sum(max(len(modes[m].intervals) for m in p.task_modes[t]) for t in range(T))
+        n_pts += max(shape[m].n_pts for m in p.task_modes[t])
+    n_iv = sum(max(len(shape[m].intervals) for m in p.task_modes[t]) for t in range(T))
     # every branch adds one edge per pair of intervals or tasks, at most once on a path
     max_edges = 4 * n_pts + 2 * len(p.task_preds) + sum(map(len, p.task_preds))
     max_edges += n_iv * n_iv + T * T + 64
@@ -606,7 +622,7 @@ def prove(
     dist = np.zeros(n_pts)
     stack = np.zeros(4 * n_pts + 16, dtype=np.int64)
     mode_of = [-1] * T
-    stats = {"nodes": 0, "pruned": 0}
+    stats = {"nodes": 0, "pruned": 0, "assignments": 0}
     reason = [""]
     last_report = [t0]
     node_limit = math.inf if max_nodes is None else max_nodes
@@ -632,19 +648,20 @@ def prove(
             last_report[0] = now
             progress(
                 f"exact: {now - t0:.0f} s, {stats['nodes']:,} nodes, "
-                f"{stats['pruned']:,} pruned, best {best_mk:.3f}"
+                f"{stats['pruned']:,} pruned, {stats['assignments']:,} mode assignments, "
+                f"best {best_mk:.3f}"
             )
         return bool(reason[0])
 
     def end_pt(t: int) -> int:
-        return int(base[t]) + modes[mode_of[t]].n_pts - 1
+        return int(base[t]) + shape[mode_of[t]].n_pts - 1
 
     # ---- phase 2 arrays (filled when every mode is fixed)
     def phase2_arrays() -> dict[str, Any]:
         t_start = base.copy()
         t_end = np.array([end_pt(t) for t in range(T)], dtype=np.int64)
         t_arm = np.array([int(p.mode_arm[mode_of[t]]) for t in range(T)], dtype=np.int64)
-        t_dur = np.array([modes[mode_of[t]].duration for t in range(T)])
+        t_dur = np.array([shape[mode_of[t]].duration for t in range(T)])
         setup = np.full((T, T), np.inf)
         for x in range(T):
             for y in range(T):
@@ -656,7 +673,7 @@ def prove(
             t_setin[t] = min(ins) if ins else 0.0
         rows: list[tuple[int, int, int, float, int, float, float, float]] = []
         for t in range(T):
-            md = modes[mode_of[t]]
+            md = shape[mode_of[t]]
             for r, j0, o0, j1, o1, ln, tl in md.intervals:
                 rows.append((r, t, int(base[t]) + j0, o0, int(base[t]) + j1, o1, ln, tl))
         rows.sort(key=lambda x: (x[0], x[2], x[1]))
@@ -673,6 +690,10 @@ def prove(
             "t_dur": t_dur,
             "t_tail": tails.copy(),
             "t_setin": t_setin,
+            "cap": np.array(
+                [[mode_cap[mode_of[x], mode_of[y]] for y in range(T)] for x in range(T)]
+            ),
+            "th": np.zeros(T),
             "setup": setup,
             "i_lo": np.array(lo if rows else [0], dtype=np.int64),
             "i_task": np.array([x[1] for x in rows], dtype=np.int64),
@@ -693,7 +714,7 @@ def prove(
         return float(
             kb.node_bound(
                 dist, a["t_start"], a["t_end"], a["t_arm"], a["t_dur"], a["t_tail"],
-                a["t_setin"], p.n_arms, a["i_lo"], a["i_task"], a["i_ps"], a["i_os"],
+                a["t_setin"], p.n_arms, a["cap"], a["th"], a["i_lo"], a["i_task"], a["i_ps"], a["i_os"],
                 a["i_len"], a["i_tail"], a["h"], a["ln"], a["tl"], a["ex"],
             )
         )  # fmt: skip
@@ -706,7 +727,7 @@ def prove(
         starts = [float(dist[base[t]]) for t in range(T)]
         ws = []
         for t in range(T):
-            md = modes[mode_of[t]]
+            md = shape[mode_of[t]]
             w = np.zeros(len(p.shapes[mode_of[t]].borders))
             for j in range(1, md.n_pts - 1):
                 gap = dist[base[t] + j] - dist[base[t] + j - 1] - (md.P[j] - md.P[j - 1])
@@ -753,29 +774,36 @@ def prove(
 
     def bound1(i: int) -> float:
         b = 0.0
-        load = np.zeros(p.n_arms)
-        first = np.full(p.n_arms, np.inf)
-        for t in order[:i]:
+        t_arm = np.full(T, -1, dtype=np.int64)
+        th = np.zeros(T)
+        t_dur = np.zeros(T)
+        cap = np.zeros((T, T))
+        done = order[:i]
+        for t in done:
             b = max(b, float(dist[end_pt(t)]) + tails[t])
-            arm = int(p.mode_arm[mode_of[t]])
-            load[arm] += modes[mode_of[t]].duration
-            first[arm] = min(first[arm], float(dist[base[t]]))
-        for arm in range(p.n_arms):
-            if load[arm] > 0:
-                b = max(b, first[arm] + load[arm])
-        return b
+            t_arm[t] = int(p.mode_arm[mode_of[t]])
+            th[t] = dist[base[t]]
+            t_dur[t] = shape[mode_of[t]].duration
+        for x in done:
+            for y in done:
+                cap[x, y] = mode_cap[mode_of[x], mode_of[y]]
+        # unassigned tasks are on no arm (-1) and left out
+        ab = kb.arm_bound(th, t_arm, t_dur, tails, np.zeros(T), cap, p.n_arms, *scratch)
+        return max(b, float(ab))
 
     def choose(i: int) -> None:
         if exhausted():
             return
         if i == T:
+            stats["assignments"] += 1
             disjunctive(phase2_arrays())
             return
         t = order[i]
-        cands = sorted(p.task_modes[t], key=lambda m: (m != inc_mode[t], p.mode_duration[m]))
+        allowed = p.task_modes[t] if modes is None else (int(modes[t]),)
+        cands = sorted(allowed, key=lambda m: (m != inc_mode[t], p.mode_duration[m]))
         for m in cands:
             stats["nodes"] += 1
-            md = modes[m]
+            md = shape[m]
             mode_of[t] = m
             arm = int(p.mode_arm[m])
             saved = dist.copy()

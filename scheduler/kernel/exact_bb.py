@@ -18,15 +18,24 @@ import numpy as np
 
 from scheduler.kernel._jit import njit
 
-__all__ = ["conflict", "node_bound", "stn_add", "stn_pop"]
+__all__ = ["arm_bound", "conflict", "node_bound", "stn_add", "stn_pop"]
 
 _EPS = 1e-9
 
 
 @njit(cache=True)  # type: ignore[untyped-decorator]
 def stn_add(
-    head: Any, nxt: Any, src: Any, dst: Any, wt: Any, ne: Any, dist: Any, stack: Any,
-    u: int, v: int, w: float,
+    head: Any,
+    nxt: Any,
+    src: Any,
+    dst: Any,
+    wt: Any,
+    ne: Any,
+    dist: Any,
+    stack: Any,
+    u: int,
+    v: int,
+    w: float,
 ) -> bool:  # pragma: no cover - compiled
     """Add ``x[v] >= x[u] + w`` (edge number ``ne[0]``); False on a positive cycle.
 
@@ -81,8 +90,16 @@ def stn_pop(head: Any, nxt: Any, src: Any, ne: Any, keep: int) -> None:  # pragm
 @njit(cache=True)  # type: ignore[untyped-decorator]
 def conflict(
     dist: Any,
-    t_start: Any, t_end: Any, t_arm: Any, setup: Any,
-    i_lo: Any, i_task: Any, i_ps: Any, i_os: Any, i_pe: Any, i_oe: Any,
+    t_start: Any,
+    t_end: Any,
+    t_arm: Any,
+    setup: Any,
+    i_lo: Any,
+    i_task: Any,
+    i_ps: Any,
+    i_os: Any,
+    i_pe: Any,
+    i_oe: Any,
     out: Any,
 ) -> int:  # pragma: no cover - compiled
     """The conflict to branch on at the earliest times ``dist``; 0 when none.
@@ -152,7 +169,9 @@ def conflict(
 
 
 @njit(cache=True)  # type: ignore[untyped-decorator]
-def _one_machine(head: Any, length: Any, tail: Any, extra: Any, n: int) -> float:  # pragma: no cover
+def _one_machine(
+    head: Any, length: Any, tail: Any, extra: Any, n: int
+) -> float:  # pragma: no cover
     """``max_k head_k + sum_{head_j >= head_k} (length_j + extra_j) - max extra_j
     + min tail_j`` over the first ``n`` items: a one-machine bound (each
     item's ``extra``, a least travel before it, counted for all but one)."""
@@ -173,11 +192,98 @@ def _one_machine(head: Any, length: Any, tail: Any, extra: Any, n: int) -> float
 
 
 @njit(cache=True)  # type: ignore[untyped-decorator]
+def arm_bound(
+    th: Any,
+    t_arm: Any,
+    t_dur: Any,
+    t_tail: Any,
+    t_setin: Any,
+    cap: Any,
+    n_arms: int,
+    h: Any,
+    ln: Any,
+    tl: Any,
+    ex: Any,
+) -> float:  # pragma: no cover - compiled
+    """Arm bounds of the tasks with ``t_arm >= 0`` (earliest starts ``th``).
+
+    Per arm, the one-machine bound (nominal durations, least travel into each
+    task counted for all but one). Per pair of arms ``A, B`` and threshold
+    ``h``: the tasks ``X`` of ``A`` and ``Y`` of ``B`` that start at ``h`` or
+    later all progress inside ``[h, C - q)`` (``q`` their least tail), ``A``
+    for ``sum X`` and ``B`` for ``sum Y``, both at once for at most
+    ``sum cap[x, y]`` (the overlap caps of :mod:`scheduler.overlap`), so
+    ``C >= h + sum X + sum Y - sum cap + q``.
+    """
+    T = len(th)
+    best = 0.0
+    for a in range(n_arms):
+        n = 0
+        for t in range(T):
+            if t_arm[t] == a:
+                h[n] = th[t]
+                ln[n] = t_dur[t]
+                tl[n] = t_tail[t]
+                ex[n] = t_setin[t]
+                n += 1
+        best = max(best, float(_one_machine(h, ln, tl, ex, n)))
+    order = np.argsort(th)
+    seen = np.zeros(T, dtype=np.bool_)
+    for a in range(n_arms):
+        for b in range(a + 1, n_arms):
+            sa = 0.0
+            sb = 0.0
+            ca = 0.0
+            cb = 0.0
+            xa = 0.0
+            xb = 0.0
+            caps = 0.0
+            qmin = np.inf
+            seen[:] = False
+            for k in range(T - 1, -1, -1):
+                x = order[k]
+                if t_arm[x] != a and t_arm[x] != b:
+                    continue
+                for y in range(T):
+                    if seen[y] and t_arm[y] != t_arm[x]:
+                        caps += cap[x, y]
+                seen[x] = True
+                if t_arm[x] == a:
+                    sa += t_dur[x]
+                    ca += t_setin[x]
+                    xa = max(xa, t_setin[x])
+                else:
+                    sb += t_dur[x]
+                    cb += t_setin[x]
+                    xb = max(xb, t_setin[x])
+                qmin = min(qmin, t_tail[x])
+                span = max(sa + ca - xa, sb + cb - xb, sa + sb - caps)
+                best = max(best, th[x] + span + qmin)
+    return best
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
 def node_bound(
     dist: Any,
-    t_start: Any, t_end: Any, t_arm: Any, t_dur: Any, t_tail: Any, t_setin: Any, n_arms: int,
-    i_lo: Any, i_task: Any, i_ps: Any, i_os: Any, i_len: Any, i_tail: Any,
-    h: Any, ln: Any, tl: Any, ex: Any,
+    t_start: Any,
+    t_end: Any,
+    t_arm: Any,
+    t_dur: Any,
+    t_tail: Any,
+    t_setin: Any,
+    n_arms: int,
+    cap: Any,
+    th: Any,
+    i_lo: Any,
+    i_task: Any,
+    i_ps: Any,
+    i_os: Any,
+    i_len: Any,
+    i_tail: Any,
+    h: Any,
+    ln: Any,
+    tl: Any,
+    ex: Any,
 ) -> float:  # pragma: no cover - compiled
     """A lower bound of every completion of the node (see :mod:`scheduler.exact`).
 
@@ -191,16 +297,11 @@ def node_bound(
     best = 0.0
     for t in range(T):
         best = max(best, dist[t_end[t]] + t_tail[t])
-    for a in range(n_arms):
-        n = 0
-        for t in range(T):
-            if t_arm[t] == a:
-                h[n] = dist[t_start[t]]
-                ln[n] = t_dur[t]
-                tl[n] = t_tail[t]
-                ex[n] = t_setin[t]
-                n += 1
-        best = max(best, _one_machine(h, ln, tl, ex, n))
+    for t in range(T):
+        th[t] = dist[t_start[t]]
+    best = max(
+        best, float(arm_bound(th, t_arm, t_dur, t_tail, t_setin, cap, n_arms, h, ln, tl, ex))
+    )
     G = len(i_lo) - 1
     for g in range(G):
         n = 0
@@ -210,5 +311,5 @@ def node_bound(
             tl[n] = i_tail[i] + t_tail[i_task[i]]
             ex[n] = 0.0
             n += 1
-        best = max(best, _one_machine(h, ln, tl, ex, n))
+        best = max(best, float(_one_machine(h, ln, tl, ex, n)))
     return best
