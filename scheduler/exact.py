@@ -510,6 +510,8 @@ def prove(
     stop: Any = None,
     cap_step: float | None = None,
     modes: Sequence[int] | None = None,
+    sequences: bool = True,
+    diagram_step: float | None = None,
 ) -> Proof:
     """Prove the optimum by branch and bound (the exact method for compiled cells).
 
@@ -620,9 +622,10 @@ def prove(
     wt = np.zeros(max_edges)
     ne = np.zeros(1, dtype=np.int64)
     dist = np.zeros(n_pts)
-    stack = np.zeros(4 * n_pts + 16, dtype=np.int64)
+    queue = np.zeros(n_pts + 1, dtype=np.int64)
+    queued = np.zeros(n_pts, dtype=np.bool_)
     mode_of = [-1] * T
-    stats = {"nodes": 0, "pruned": 0, "assignments": 0}
+    stats = {"nodes": 0, "pruned": 0, "assignments": 0, "diagrams": 0}
     reason = [""]
     last_report = [t0]
     node_limit = math.inf if max_nodes is None else max_nodes
@@ -630,7 +633,7 @@ def prove(
     def add(u: int, v: int, w: float) -> bool:
         if ne[0] >= len(src):
             raise RuntimeError("edge store full")  # pragma: no cover - sized above
-        return bool(kb.stn_add(head, nxt, src, dst, wt, ne, dist, stack, u, v, w))
+        return bool(kb.stn_add(head, nxt, src, dst, wt, ne, dist, queue, queued, u, v, w))
 
     def exhausted() -> bool:
         if reason[0]:
@@ -649,6 +652,7 @@ def prove(
             progress(
                 f"exact: {now - t0:.0f} s, {stats['nodes']:,} nodes, "
                 f"{stats['pruned']:,} pruned, {stats['assignments']:,} mode assignments, "
+                f"{stats['diagrams']:,} sequences, "
                 f"best {best_mk:.3f}"
             )
         return bool(reason[0])
@@ -737,11 +741,11 @@ def prove(
         best_mk = validate(problem, sched)
         best_sched = sched
 
-    def disjunctive(a: dict[str, Any]) -> None:
+    def disjunctive(a: dict[str, Any], floor: float = 0.0) -> None:
         if exhausted():
             return
         stats["nodes"] += 1
-        if bound2(a) >= best_mk - _EPS:
+        if max(floor, bound2(a)) >= best_mk - _EPS:
             stats["pruned"] += 1
             return
         out = a["out"]
@@ -762,7 +766,7 @@ def prove(
             saved = dist.copy()
             keep = int(ne[0])
             if add(u, v, w):
-                disjunctive(a)
+                disjunctive(a, floor)
             else:
                 stats["pruned"] += 1
             kb.stn_pop(head, nxt, src, ne, keep)
@@ -791,12 +795,132 @@ def prove(
         ab = kb.arm_bound(th, t_arm, t_dur, tails, np.zeros(T), cap, p.n_arms, *scratch)
         return max(b, float(ab))
 
+    presence = np.array(
+        [r < p.n_zones or r >= 2 * p.n_zones for r in range(2 * p.n_zones + p.n_tools)],
+        dtype=np.bool_,
+    )
+    nominal = []  # per mode: (res, s, e) arrays of its intervals, offsets from its start
+    for md in shape:
+        rows_ = [(r, md.P[j0] + o0, md.P[j1] + o1) for r, j0, o0, j1, o1, _, _ in md.intervals]
+        nominal.append(
+            (
+                np.array([x[0] for x in rows_], dtype=np.int64),
+                np.array([x[1] for x in rows_]),
+                np.array([x[2] for x in rows_]),
+            )
+        )
+    loads = [0.0] * p.n_arms
+    for t in range(T):
+        for m in p.task_modes[t]:
+            loads[int(p.mode_arm[m])] += float(p.mode_duration[m]) / len(p.task_modes[t])
+    step = diagram_step if diagram_step is not None else max(max(loads) / 400.0, 1e-6)
+
+    def laid_out(arm: int, seq: list[int]) -> tuple[float, dict[int, float], list[Any]]:
+        """The arm's progress axis: its tasks and travel end to end."""
+        off = p.setup_time(arm, -1, seq[0]) if seq else 0.0
+        at: dict[int, float] = {}
+        parts = []
+        prev = -1
+        for t in seq:
+            if prev >= 0:
+                off += p.setup_time(arm, prev, t)
+            at[t] = off
+            r, s0, e0 = nominal[mode_of[t]]
+            parts.append((r, s0 + off, e0 + off))
+            off += shape[mode_of[t]].duration
+            prev = t
+        return off, at, parts
+
+    def diagram_bound(seqs: list[list[int]]) -> float:
+        """The largest coordination-diagram bound over pairs of arms (-1: infeasible)."""
+        outs = [laid_out(arm, seq) for arm, seq in enumerate(seqs)]
+        best = 0.0
+        for x in range(p.n_arms):
+            for y in range(x + 1, p.n_arms):
+                if not seqs[x] or not seqs[y]:
+                    continue
+                la, at_a, pa = outs[x]
+                lb, at_b, pb = outs[y]
+                pd, pe, ps = [], [], []
+                for t in seqs[y]:
+                    for q in p.task_preds[t]:
+                        if q in at_a:
+                            pd.append(0)
+                            pe.append(at_a[q] + shape[mode_of[q]].duration)
+                            ps.append(at_b[t])
+                for t in seqs[x]:
+                    for q in p.task_preds[t]:
+                        if q in at_b:
+                            pd.append(1)
+                            pe.append(at_b[q] + shape[mode_of[q]].duration)
+                            ps.append(at_a[t])
+                diag = kb.diagram_diagonal(
+                    la, lb,
+                    np.concatenate([r for r, _, _ in pa]), np.concatenate([s for _, s, _ in pa]),
+                    np.concatenate([e for _, _, e in pa]), np.concatenate([r for r, _, _ in pb]),
+                    np.concatenate([s for _, s, _ in pb]), np.concatenate([e for _, _, e in pb]),
+                    presence, np.array(pd, dtype=np.int64), np.array(pe, dtype=float),
+                    np.array(ps, dtype=float), step,
+                )  # fmt: skip
+                if diag < 0:
+                    return -1.0
+                best = max(best, la + lb - float(diag))
+        return best
+
+    def sequence(a: dict[str, Any], arms: list[list[int]], k: int, seq: list[int]) -> None:
+        """Fix each arm's task sequence (arm ``k`` is being built as ``seq``;
+        the arms before it are in ``done_seqs``)."""
+        if exhausted():
+            return
+        stats["nodes"] += 1
+        if bound2(a) >= best_mk - _EPS:
+            stats["pruned"] += 1
+            return
+        if len(seq) == len(arms[k]):
+            done_seqs.append(list(seq))
+            if k + 1 < p.n_arms:
+                sequence(a, arms, k + 1, [])
+            else:
+                floor = diagram_bound(done_seqs)
+                stats["diagrams"] += 1
+                if floor < 0 or floor >= best_mk - _EPS:
+                    stats["pruned"] += 1
+                else:
+                    disjunctive(a, floor)
+            done_seqs.pop()
+            return
+        rest = sorted(set(arms[k]) - set(seq), key=lambda t: (inc_start[t], t))
+        for y in rest:
+            saved = dist.copy()
+            keep = int(ne[0])
+            ok = True
+            if seq:
+                x = seq[-1]
+                ok = add(int(a["t_end"][x]), int(a["t_start"][y]), p.setup_time(k, x, y))
+            if ok:
+                seq.append(y)
+                sequence(a, arms, k, seq)
+                seq.pop()
+            else:
+                stats["pruned"] += 1
+            kb.stn_pop(head, nxt, src, ne, keep)
+            dist[:] = saved
+            if reason[0]:
+                return
+
+    done_seqs: list[list[int]] = []
+
     def choose(i: int) -> None:
         if exhausted():
             return
         if i == T:
             stats["assignments"] += 1
-            disjunctive(phase2_arrays())
+            a = phase2_arrays()
+            if sequences:
+                arms = [[t for t in range(T) if a["t_arm"][t] == arm] for arm in range(p.n_arms)]
+                sequence(a, arms, 0, [])
+            else:
+                disjunctive(a)
             return
         t = order[i]
         allowed = p.task_modes[t] if modes is None else (int(modes[t]),)

@@ -17,8 +17,9 @@ from typing import Any
 import numpy as np
 
 from scheduler.kernel._jit import njit
+from scheduler.overlap import _chain
 
-__all__ = ["arm_bound", "conflict", "node_bound", "stn_add", "stn_pop"]
+__all__ = ["arm_bound", "conflict", "diagram_diagonal", "node_bound", "stn_add", "stn_pop"]
 
 _EPS = 1e-9
 
@@ -32,14 +33,22 @@ def stn_add(
     wt: Any,
     ne: Any,
     dist: Any,
-    stack: Any,
+    queue: Any,
+    queued: Any,
     u: int,
     v: int,
     w: float,
 ) -> bool:  # pragma: no cover - compiled
     """Add ``x[v] >= x[u] + w`` (edge number ``ne[0]``); False on a positive cycle.
 
-    The edge stays in either case (pop it with :func:`stn_pop`)."""
+    The edge stays in either case (pop it with :func:`stn_pop`). First-in
+    first-out label correcting from ``v`` (``queue`` holds ``len(dist) + 1``
+    points, ``queued`` all False on entry and on return): the network had no
+    positive cycle before, so any new one runs through the new edge and
+    shows as ``x[u]`` growing; without one, every point is queued at most
+    ``len(dist)`` times, so the count limit is only a safety net (hitting it
+    also reports a cycle).
+    """
     e = ne[0]
     src[e] = u
     dst[e] = v
@@ -49,32 +58,42 @@ def stn_add(
     ne[0] = e + 1
     if dist[u] + w <= dist[v] + _EPS:
         return True
+    n = len(dist)
+    cap = len(queue)
     dist[v] = dist[u] + w
-    top = 0
-    stack[top] = v
-    top += 1
+    lo = 0
+    size = 1
+    queue[0] = v
+    queued[v] = True
     count = 0
-    limit = 4 * len(dist) * len(dist) + 100
-    while top > 0:
-        top -= 1
-        x = stack[top]
+    limit = n * n + 100
+    ok = True
+    while size > 0:
+        x = queue[lo]
+        lo = (lo + 1) % cap
+        size -= 1
+        queued[x] = False
+        if not ok:
+            continue  # drain, so that queued is all False again
         dx = dist[x]
         f = head[x]
         while f >= 0:
             y = dst[f]
             if dx + wt[f] > dist[y] + _EPS:
                 if y == u:
-                    return False
+                    ok = False
+                    break
                 dist[y] = dx + wt[f]
-                if top >= len(stack):
-                    return False
-                stack[top] = y
-                top += 1
-                count += 1
-                if count > limit:
-                    return False
+                if not queued[y]:
+                    queue[(lo + size) % cap] = y
+                    size += 1
+                    queued[y] = True
+                    count += 1
+                    if count > limit:
+                        ok = False
+                        break
             f = nxt[f]
-    return True
+    return ok
 
 
 @njit(cache=True)  # type: ignore[untyped-decorator]
@@ -313,3 +332,72 @@ def node_bound(
             n += 1
         best = max(best, float(_one_machine(h, ln, tl, ex, n)))
     return best
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def _mark(
+    flags: Any, s1: float, e1: float, s2: float, e2: float, step: float
+) -> None:  # pragma: no cover - compiled
+    """Set the cells lying entirely inside the open rectangle (as :mod:`scheduler.overlap`)."""
+    n, m = flags.shape
+    i0 = max(int(np.floor(s1 / step)) + 1, 0)
+    i1 = min(int(np.ceil(e1 / step)) - 2, n - 1)
+    j0 = max(int(np.floor(s2 / step)) + 1, 0)
+    j1 = min(int(np.ceil(e2 / step)) - 2, m - 1)
+    for i in range(i0, i1 + 1):
+        for j in range(j0, j1 + 1):
+            flags[i, j] = True
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def diagram_diagonal(
+    la: float,
+    lb: float,
+    a_res: Any,
+    a_s: Any,
+    a_e: Any,
+    b_res: Any,
+    b_s: Any,
+    b_e: Any,
+    presence: Any,
+    p_dir: Any,
+    p_end: Any,
+    p_start: Any,
+    step: float,
+) -> float:  # pragma: no cover - compiled
+    """An upper bound on the time two arms progress at once over their whole
+    sequences (the coordination diagram of the concatenated sequences, arm A
+    of length ``la`` against arm B of ``lb``); -1 when no path exists.
+
+    Windows ``(res, s, e)`` are offsets on each arm's own progress axis
+    (tasks and travel laid end to end). Two windows in one resource forbid
+    their open rectangle (blocked when ``presence[res]``: an exclusive zone
+    or a tool; else closed to diagonal steps: movement in a shared zone). A
+    precedence ``k`` with ``p_dir[k] == 0`` (a task of A before one of B)
+    forbids ``u < p_end[k]`` together with ``v > p_start[k]`` (and with the
+    axes swapped when ``p_dir[k] == 1``). The longest chain of
+    :func:`scheduler.overlap._chain` times ``step`` bounds the diagonal of
+    every monotone path (:mod:`scheduler.overlap`'s argument).
+    """
+    n = max(1, int(np.ceil(la / step - 1e-9)))
+    m = max(1, int(np.ceil(lb / step - 1e-9)))
+    blocked = np.zeros((n, m), dtype=np.bool_)
+    nodiag = np.zeros((n, m), dtype=np.bool_)
+    for i in range(len(a_res)):
+        for j in range(len(b_res)):
+            if a_res[i] != b_res[j]:
+                continue
+            if presence[a_res[i]]:
+                _mark(blocked, a_s[i], a_e[i], b_s[j], b_e[j], step)
+            _mark(nodiag, a_s[i], a_e[i], b_s[j], b_e[j], step)
+    for k in range(len(p_dir)):
+        if p_dir[k] == 0:
+            _mark(blocked, -2.0 * step, p_end[k], p_start[k], lb + 2.0 * step, step)
+        else:
+            _mark(blocked, p_start[k], la + 2.0 * step, -2.0 * step, p_end[k], step)
+    if blocked[0, 0] or blocked[n - 1, m - 1]:
+        return -1.0
+    table = _chain(blocked, nodiag)
+    if table[n - 1, m - 1] < 0:
+        return -1.0
+    return min(float(table[n - 1, m - 1]) * step, la, lb)
