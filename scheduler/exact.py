@@ -625,7 +625,7 @@ def prove(
     queue = np.zeros(n_pts + 1, dtype=np.int64)
     queued = np.zeros(n_pts, dtype=np.bool_)
     mode_of = [-1] * T
-    stats = {"nodes": 0, "pruned": 0, "assignments": 0, "diagrams": 0}
+    stats = {"nodes": 0, "pruned": 0, "assignments": 0, "diagrams": 0, "searched": 0}
     reason = [""]
     last_report = [t0]
     node_limit = math.inf if max_nodes is None else max_nodes
@@ -652,7 +652,7 @@ def prove(
             progress(
                 f"exact: {now - t0:.0f} s, {stats['nodes']:,} nodes, "
                 f"{stats['pruned']:,} pruned, {stats['assignments']:,} mode assignments, "
-                f"{stats['diagrams']:,} sequences, "
+                f"{stats['diagrams']:,} sequences ({stats['searched']:,} searched), "
                 f"best {best_mk:.3f}"
             )
         return bool(reason[0])
@@ -854,17 +854,25 @@ def prove(
                             pd.append(1)
                             pe.append(at_b[q] + shape[mode_of[q]].duration)
                             ps.append(at_a[t])
-                diag = kb.diagram_diagonal(
+                heads = [
+                    (
+                        np.array([at[t] for t in sq]),
+                        np.array([float(dist[base[t]]) for t in sq]),
+                    )
+                    for at, sq in ((at_a, seqs[x]), (at_b, seqs[y]))
+                ]
+                low = kb.diagram_bound(
                     la, lb,
                     np.concatenate([r for r, _, _ in pa]), np.concatenate([s for _, s, _ in pa]),
                     np.concatenate([e for _, _, e in pa]), np.concatenate([r for r, _, _ in pb]),
                     np.concatenate([s for _, s, _ in pb]), np.concatenate([e for _, _, e in pb]),
                     presence, np.array(pd, dtype=np.int64), np.array(pe, dtype=float),
-                    np.array(ps, dtype=float), step,
+                    np.array(ps, dtype=float), heads[0][0], heads[0][1], heads[1][0],
+                    heads[1][1], step,
                 )  # fmt: skip
-                if diag < 0:
+                if low < 0:
                     return -1.0
-                best = max(best, la + lb - float(diag))
+                best = max(best, float(low))
         return best
 
     def sequence(a: dict[str, Any], arms: list[list[int]], k: int, seq: list[int]) -> None:
@@ -886,6 +894,7 @@ def prove(
                 if floor < 0 or floor >= best_mk - _EPS:
                     stats["pruned"] += 1
                 else:
+                    stats["searched"] += 1
                     disjunctive(a, floor)
             done_seqs.pop()
             return

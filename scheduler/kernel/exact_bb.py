@@ -19,7 +19,7 @@ import numpy as np
 from scheduler.kernel._jit import njit
 from scheduler.overlap import _chain
 
-__all__ = ["arm_bound", "conflict", "diagram_diagonal", "node_bound", "stn_add", "stn_pop"]
+__all__ = ["arm_bound", "conflict", "diagram_bound", "node_bound", "stn_add", "stn_pop"]
 
 _EPS = 1e-9
 
@@ -350,34 +350,31 @@ def _mark(
 
 
 @njit(cache=True)  # type: ignore[untyped-decorator]
-def diagram_diagonal(
-    la: float,
-    lb: float,
-    a_res: Any,
-    a_s: Any,
-    a_e: Any,
-    b_res: Any,
-    b_s: Any,
-    b_e: Any,
-    presence: Any,
-    p_dir: Any,
-    p_end: Any,
-    p_start: Any,
-    step: float,
+def diagram_bound(
+    la: float, lb: float,
+    a_res: Any, a_s: Any, a_e: Any, b_res: Any, b_s: Any, b_e: Any, presence: Any,
+    p_dir: Any, p_end: Any, p_start: Any,
+    a_at: Any, a_head: Any, b_at: Any, b_head: Any, step: float,
 ) -> float:  # pragma: no cover - compiled
-    """An upper bound on the time two arms progress at once over their whole
-    sequences (the coordination diagram of the concatenated sequences, arm A
-    of length ``la`` against arm B of ``lb``); -1 when no path exists.
+    """A lower bound of the makespan from the coordination diagram of two arms'
+    whole sequences (-1: no path, the sequences are infeasible).
 
-    Windows ``(res, s, e)`` are offsets on each arm's own progress axis
-    (tasks and travel laid end to end). Two windows in one resource forbid
-    their open rectangle (blocked when ``presence[res]``: an exclusive zone
-    or a tool; else closed to diagonal steps: movement in a shared zone). A
-    precedence ``k`` with ``p_dir[k] == 0`` (a task of A before one of B)
-    forbids ``u < p_end[k]`` together with ``v > p_start[k]`` (and with the
-    axes swapped when ``p_dir[k] == 1``). The longest chain of
-    :func:`scheduler.overlap._chain` times ``step`` bounds the diagonal of
-    every monotone path (:mod:`scheduler.overlap`'s argument).
+    Arm A's progress axis has length ``la`` (its tasks and travel end to end),
+    B's ``lb``; windows ``(res, s, e)`` are offsets on those axes. Two windows
+    in one resource forbid their open rectangle (blocked when
+    ``presence[res]``: an exclusive zone or a tool; else closed to diagonal
+    steps: movement in a shared zone). A precedence ``k`` with ``p_dir[k] ==
+    0`` (a task of A before one of B) forbids ``u < p_end[k]`` together with
+    ``v > p_start[k]`` (axes swapped when ``p_dir[k] == 1``). A schedule is a
+    monotone path from ``(0, 0)`` to ``(la, lb)`` taking ``la + lb - D`` time
+    at least, ``D`` its diagonal, and the longest chain of
+    :func:`scheduler.overlap._chain` times ``step`` bounds ``D``
+    (:mod:`scheduler.overlap`'s argument). Heads: A's task starting at
+    progress ``a_at[k]`` starts no earlier than ``a_head[k]``; when the path
+    crosses ``u = a_at[k]`` at ``v`` in cell row ``j``, the time is at least
+    ``max(a_head[k], a_at[k], j step)`` and what is left takes at least
+    ``la - a_at[k] + lb - (j + 1) step`` less the chain from that cell to the
+    end; the least over ``j`` bounds the makespan (B's heads likewise).
     """
     n = max(1, int(np.ceil(la / step - 1e-9)))
     m = max(1, int(np.ceil(lb / step - 1e-9)))
@@ -400,4 +397,30 @@ def diagram_diagonal(
     table = _chain(blocked, nodiag)
     if table[n - 1, m - 1] < 0:
         return -1.0
-    return min(float(table[n - 1, m - 1]) * step, la, lb)
+    best = la + lb - min(float(table[n - 1, m - 1]) * step, la, lb)
+    if len(a_at) + len(b_at) == 0:
+        return best
+    back = _chain(
+        np.ascontiguousarray(blocked[::-1, ::-1]), np.ascontiguousarray(nodiag[::-1, ::-1])
+    )[::-1, ::-1]
+    for k in range(len(a_at)):
+        i = min(max(int(np.floor(a_at[k] / step)), 0), n - 1)
+        low = np.inf
+        for j in range(m):
+            if back[i, j] < 0:
+                continue
+            rest = la - a_at[k] + lb - (j + 1) * step - back[i, j] * step
+            low = min(low, max(a_head[k], a_at[k], j * step) + max(rest, 0.0))
+        if low < np.inf:
+            best = max(best, low)
+    for k in range(len(b_at)):
+        j = min(max(int(np.floor(b_at[k] / step)), 0), m - 1)
+        low = np.inf
+        for i in range(n):
+            if back[i, j] < 0:
+                continue
+            rest = lb - b_at[k] + la - (i + 1) * step - back[i, j] * step
+            low = min(low, max(b_head[k], b_at[k], i * step) + max(rest, 0.0))
+        if low < np.inf:
+            best = max(best, low)
+    return best
