@@ -512,6 +512,7 @@ def prove(
     modes: Sequence[int] | None = None,
     sequences: bool = True,
     diagram_step: float | None = None,
+    max_leaves: int = 2_000_000,
 ) -> Proof:
     """Prove the optimum by branch and bound (the exact method for compiled cells).
 
@@ -625,7 +626,7 @@ def prove(
     queue = np.zeros(n_pts + 1, dtype=np.int64)
     queued = np.zeros(n_pts, dtype=np.bool_)
     mode_of = [-1] * T
-    stats = {"nodes": 0, "pruned": 0, "assignments": 0, "diagrams": 0, "searched": 0}
+    stats = {"nodes": 0, "pruned": 0, "assignments": 0, "diagrams": 0, "searched": 0, "leaves": 0}
     reason = [""]
     last_report = [t0]
     node_limit = math.inf if max_nodes is None else max_nodes
@@ -652,7 +653,8 @@ def prove(
             progress(
                 f"exact: {now - t0:.0f} s, {stats['nodes']:,} nodes, "
                 f"{stats['pruned']:,} pruned, {stats['assignments']:,} mode assignments, "
-                f"{stats['diagrams']:,} sequences ({stats['searched']:,} searched), "
+                f"{stats['diagrams']:,} sequences, {len(leaves):,} kept, "
+                f"{stats['searched']:,} searched, "
                 f"best {best_mk:.3f}"
             )
         return bool(reason[0])
@@ -894,8 +896,7 @@ def prove(
                 if floor < 0 or floor >= best_mk - _EPS:
                     stats["pruned"] += 1
                 else:
-                    stats["searched"] += 1
-                    disjunctive(a, floor)
+                    leaves.append((floor, tuple(mode_of), [list(q) for q in done_seqs]))
             done_seqs.pop()
             return
         rest = sorted(set(arms[k]) - set(seq), key=lambda t: (inc_start[t], t))
@@ -919,6 +920,27 @@ def prove(
 
     done_seqs: list[list[int]] = []
 
+    def place(t: int, m: int) -> bool:
+        """Add the time points' edges of task ``t`` in mode ``m`` (``mode_of[t] == m``)."""
+        md = shape[m]
+        arm = int(p.mode_arm[m])
+        first = int(base[t])
+        release = max(
+            float(p.task_release[t]), float(p.arm_available[arm]) + p.setup_time(arm, -1, t)
+        )
+        ok = add(0, first, release)
+        for j in range(1, md.n_pts):
+            step = md.P[j] - md.P[j - 1]
+            ok = add(first + j - 1, first + j, step) and ok
+            if j == md.n_pts - 1:  # no wait at the end: the task ends on time
+                ok = add(first + j, first + j - 1, -step) and ok
+        for q in p.task_preds[t]:
+            ok = add(end_pt(q), first, 0.0) and ok
+        return ok
+
+    # (floor, modes, sequences) of every leaf of the first pass not cut by its bound
+    leaves: list[tuple[float, tuple[int, ...], list[list[int]]]] = []
+
     def choose(i: int) -> None:
         if exhausted():
             return
@@ -928,6 +950,8 @@ def prove(
             if sequences:
                 arms = [[t for t in range(T) if a["t_arm"][t] == arm] for arm in range(p.n_arms)]
                 sequence(a, arms, 0, [])
+                if len(leaves) > max_leaves:
+                    reason[0] = "leaves"
             else:
                 disjunctive(a)
             return
@@ -936,23 +960,10 @@ def prove(
         cands = sorted(allowed, key=lambda m: (m != inc_mode[t], p.mode_duration[m]))
         for m in cands:
             stats["nodes"] += 1
-            md = shape[m]
             mode_of[t] = m
-            arm = int(p.mode_arm[m])
             saved = dist.copy()
             keep = int(ne[0])
-            first = int(base[t])
-            release = max(
-                float(p.task_release[t]), float(p.arm_available[arm]) + p.setup_time(arm, -1, t)
-            )
-            ok = add(0, first, release)
-            for j in range(1, md.n_pts):
-                step = md.P[j] - md.P[j - 1]
-                ok = add(first + j - 1, first + j, step) and ok
-                if j == md.n_pts - 1:  # no wait at the end: the task ends on time
-                    ok = add(first + j, first + j - 1, -step) and ok
-            for q in p.task_preds[t]:
-                ok = add(end_pt(q), first, 0.0) and ok
+            ok = place(t, m)
             if ok and bound1(i + 1) < best_mk - _EPS:
                 choose(i + 1)
             else:
@@ -964,8 +975,32 @@ def prove(
                 return
 
     choose(0)
+    floor_now = -math.inf  # the floor of the leaf searched when the second pass stopped
+    if sequences and not reason[0]:
+        # second pass: the leaves by increasing floor; every schedule better than
+        # the best lies in a leaf not yet searched, so its floor bounds the optimum
+        leaves.sort(key=lambda x: x[0])
+        stats["leaves"] = len(leaves)
+        for floor, ms, seqs in leaves:
+            if floor >= best_mk - _EPS or reason[0]:
+                break
+            floor_now = floor
+            kb.stn_pop(head, nxt, src, ne, 0)
+            dist[:] = 0.0
+            ok = True
+            for t in order:
+                mode_of[t] = ms[t]
+                ok = place(t, ms[t]) and ok
+            a = phase2_arrays()
+            for arm, sq in enumerate(seqs):
+                for x, y in itertools.pairwise(sq):
+                    ok = add(end_pt(x), int(base[y]), p.setup_time(arm, x, y)) and ok
+            stats["searched"] += 1
+            if ok:
+                disjunctive(a, floor)
     proven = not reason[0] or reason[0] == "met the lower bound"
-    bound = best_mk if proven else max(lower, float(lower_bound_of(p)))
+    root = max(lower, float(lower_bound_of(p)))
+    bound = best_mk if proven else min(best_mk, max(root, floor_now))
     return Proof(
         best_sched,
         best_mk,
