@@ -863,15 +863,19 @@ def prove(
                     )
                     for at, sq in ((at_a, seqs[x]), (at_b, seqs[y]))
                 ]
-                low = kb.diagram_bound(
+                args = (
                     la, lb,
                     np.concatenate([r for r, _, _ in pa]), np.concatenate([s for _, s, _ in pa]),
                     np.concatenate([e for _, _, e in pa]), np.concatenate([r for r, _, _ in pb]),
                     np.concatenate([s for _, s, _ in pb]), np.concatenate([e for _, _, e in pb]),
                     presence, np.array(pd, dtype=np.int64), np.array(pe, dtype=float),
                     np.array(ps, dtype=float), heads[0][0], heads[0][1], heads[1][0],
-                    heads[1][1], step,
+                    heads[1][1],
                 )  # fmt: skip
+                # a coarse grid first (any cell side gives a bound), the fine one if needed
+                low = kb.diagram_bound(*args, 4.0 * step, best_mk - _EPS)
+                if 0 <= low < best_mk - _EPS:
+                    low = kb.diagram_bound(*args, step, best_mk - _EPS)
                 if low < 0:
                     return -1.0
                 best = max(best, float(low))

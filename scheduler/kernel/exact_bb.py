@@ -354,7 +354,7 @@ def diagram_bound(
     la: float, lb: float,
     a_res: Any, a_s: Any, a_e: Any, b_res: Any, b_s: Any, b_e: Any, presence: Any,
     p_dir: Any, p_end: Any, p_start: Any,
-    a_at: Any, a_head: Any, b_at: Any, b_head: Any, step: float,
+    a_at: Any, a_head: Any, b_at: Any, b_head: Any, step: float, cut: float,
 ) -> float:  # pragma: no cover - compiled
     """A lower bound of the makespan from the coordination diagram of two arms'
     whole sequences (-1: no path, the sequences are infeasible).
@@ -375,6 +375,7 @@ def diagram_bound(
     ``max(a_head[k], a_at[k], j step)`` and what is left takes at least
     ``la - a_at[k] + lb - (j + 1) step`` less the chain from that cell to the
     end; the least over ``j`` bounds the makespan (B's heads likewise).
+    Returns as soon as the bound reaches ``cut``.
     """
     n = max(1, int(np.ceil(la / step - 1e-9)))
     m = max(1, int(np.ceil(lb / step - 1e-9)))
@@ -398,7 +399,7 @@ def diagram_bound(
     if table[n - 1, m - 1] < 0:
         return -1.0
     best = la + lb - min(float(table[n - 1, m - 1]) * step, la, lb)
-    if len(a_at) + len(b_at) == 0:
+    if len(a_at) + len(b_at) == 0 or best >= cut:
         return best
     back = _chain(
         np.ascontiguousarray(blocked[::-1, ::-1]), np.ascontiguousarray(nodiag[::-1, ::-1])
