@@ -355,6 +355,7 @@ def diagram_bound(
     a_res: Any, a_s: Any, a_e: Any, b_res: Any, b_s: Any, b_e: Any, presence: Any,
     p_dir: Any, p_end: Any, p_start: Any,
     a_at: Any, a_head: Any, b_at: Any, b_head: Any, step: float, cut: float,
+    max_cells: float = 160_000.0,
 ) -> float:  # pragma: no cover - compiled
     """A lower bound of the makespan from the coordination diagram of two arms'
     whole sequences (-1: no path, the sequences are infeasible).
@@ -375,8 +376,10 @@ def diagram_bound(
     ``max(a_head[k], a_at[k], j step)`` and what is left takes at least
     ``la - a_at[k] + lb - (j + 1) step`` less the chain from that cell to the
     end; the least over ``j`` bounds the makespan (B's heads likewise).
-    Returns as soon as the bound reaches ``cut``.
+    Returns as soon as the bound reaches ``cut``. The cell side is raised so
+    that the grid has at most ``max_cells`` cells (any side gives a bound).
     """
+    step = max(step, np.sqrt(la * lb / max_cells))
     n = max(1, int(np.ceil(la / step - 1e-9)))
     m = max(1, int(np.ceil(lb / step - 1e-9)))
     blocked = np.zeros((n, m), dtype=np.bool_)

@@ -53,6 +53,25 @@ def test_prove_meets_cpsat_proven_optimum(seed: int) -> None:
     again = prove(p, time_limit=30, waits=waits, incumbent=tree.schedule)
     assert again.proven and again.makespan == pytest.approx(cp.objective, abs=1e-6)
     assert again.makespan <= tree.objective + 1e-9
+    if seed % 3 == 0:  # without the sequence level (modes, then pairwise orders only)
+        plain = prove(p, time_limit=30, waits=waits, sequences=False)
+        assert plain.proven and plain.makespan == pytest.approx(cp.objective, abs=1e-6)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_sequence_level_alone_meets_cpsat(seed: int) -> None:
+    """The arm-sequence level and its coordination-diagram bound on their own
+    (``plain_nodes=0``: no first search without them) prove CP-SAT's optimum."""
+    p = random_problem(
+        2, 4 + seed % 2, 1 + seed % 3, seed % 2, seed=300 + seed, zone_fraction=1.0,
+        setups=seed % 3 != 0,
+    )  # fmt: skip
+    cp = solve(p, "cpsat", time_limit=20, seed=0, workers=1)
+    assert cp.status.value == "optimal"
+    res = prove(p, time_limit=60, plain_nodes=0)
+    assert res.proven and res.schedule is not None
+    assert res.makespan == pytest.approx(cp.objective, abs=1e-6)
+    assert validate(p, res.schedule) == pytest.approx(res.makespan, abs=1e-9)
 
 
 def test_work_limit_is_deterministic_and_bound_stays_below() -> None:
