@@ -351,10 +351,24 @@ def _mark(
 
 @njit(cache=True)  # type: ignore[untyped-decorator]
 def diagram_bound(
-    la: float, lb: float,
-    a_res: Any, a_s: Any, a_e: Any, b_res: Any, b_s: Any, b_e: Any, presence: Any,
-    p_dir: Any, p_end: Any, p_start: Any,
-    a_at: Any, a_head: Any, b_at: Any, b_head: Any, step: float, cut: float,
+    la: float,
+    lb: float,
+    a_res: Any,
+    a_s: Any,
+    a_e: Any,
+    b_res: Any,
+    b_s: Any,
+    b_e: Any,
+    presence: Any,
+    p_dir: Any,
+    p_end: Any,
+    p_start: Any,
+    a_at: Any,
+    a_head: Any,
+    b_at: Any,
+    b_head: Any,
+    step: float,
+    cut: float,
     max_cells: float = 160_000.0,
 ) -> float:  # pragma: no cover - compiled
     """A lower bound of the makespan from the coordination diagram of two arms'
