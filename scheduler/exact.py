@@ -482,7 +482,11 @@ class Proof:
         Wall time.
     reason : str
         Why it stopped: ``"proven"``, ``"time"``, ``"nodes"``, ``"stopped"``,
-        or why the method does not apply (then nothing was searched).
+        ``"leaves"`` (more kept leaves than ``max_leaves``), or why the method
+        does not apply (then nothing was searched).
+    counts : tuple of (str, int)
+        Work by level: mode assignments completed, arm-sequence leaves reached
+        (``sequences``), kept for the second pass (``kept``) and searched.
     """
 
     schedule: Schedule | None
@@ -493,6 +497,7 @@ class Proof:
     pruned: int
     seconds: float
     reason: str
+    counts: tuple[tuple[str, int], ...] = ()
 
 
 def relevant_borders(problem: Problem, m: int, resources: frozenset[int]) -> tuple[float, ...]:
@@ -1121,6 +1126,12 @@ def prove(
         int(stats["pruned"]),
         time.perf_counter() - t0,
         "proven" if proven else reason[0],
+        (
+            ("assignments", int(stats["assignments"])),
+            ("sequences", int(stats["diagrams"])),
+            ("kept", len(leaves)),
+            ("searched", int(stats["searched"])),
+        ),
     )
 
 
