@@ -349,7 +349,9 @@ def _mark(
             flags[i, j] = True
 
 
-@njit(cache=True)  # type: ignore[untyped-decorator]
+# not cached: it calls scheduler.overlap._chain, and numba checks a cached
+# function against its own file only (a stale _chain would be kept)
+@njit(cache=False)  # type: ignore[untyped-decorator]
 def diagram_bound(
     la: float,
     lb: float,
