@@ -25,12 +25,72 @@ that charges nothing anywhere can be dropped first, see
 starting inside an exclusive zone, and setup times that obey the triangle
 inequality (``setup(p, q) <= setup(p, r) + duration(r) + setup(r, q)``,
 true of travel times), so that an arm's pairwise orders imply its sequence.
+
+:func:`prove` (the exact method for compiled cells)
+----------------------------------------------------
+The same search, made to prove the optimum of the built-in cells (see
+docs/scheduler.md, "The exact reference on compiled cells"). Each rule below
+keeps the optimum of the true problem (waits at zone borders allowed, as
+:func:`scheduler.validate` allows them), so a finished search is a proof:
+
+* **Reductions.** An idle blocking oracle is dropped (:func:`without_idle_oracle`:
+  no schedule changes). Dominated resources are left out
+  (:func:`scheduler.cpsat.essential_resources`: each of their uses lies
+  inside a use of a kept resource by the same task, waits included). Only
+  *relevant* borders get a time point (:func:`relevant_borders`): a wait at
+  any other border ``b`` is moved to the next relevant border, or dropped
+  after the last one; no kept window starts between them, a kept window
+  ending between them ends earlier, one spanning both is unchanged, no kept
+  movement window has ``b`` strictly inside it (else ``b`` would be
+  relevant), and the task ends no later, so the moved schedule is valid and
+  no longer.
+* **Modes** are fixed task by task (the incumbent's first). Bound: the
+  longest path of the chosen tasks plus their tails (least durations of
+  their successors), and the arm bounds below on the chosen tasks.
+* **Arm sequences** are fixed arm by arm (the incumbent's order first); each
+  consecutive pair adds ``start >= end + travel``, which with the triangle
+  inequality orders every pair of the arm's tasks. Every schedule has one
+  sequence per arm, so enumerating them all loses nothing.
+* **Pairwise orders** of intervals of different arms in one kept resource
+  that overlap at the earliest times (the earliest conflict first), as in
+  :func:`branch_and_bound`; with no conflict left, the earliest times are a
+  valid schedule (validated before it is kept).
+* **Node bounds** (each a lower bound of every completion, waits included,
+  since a wait only lengthens what it is in): the earliest end of every task
+  plus its tail; per arm, the one-machine bound of its tasks (a later start
+  plus all durations and least travel into all but one of them plus the
+  least tail); per kept resource, the same over its intervals (their
+  nominal lengths, the rest of the task after them plus its tail); per pair
+  of arms and threshold ``h``, the tasks of both starting at ``h`` or later
+  progress ``sum X`` and ``sum Y`` and both at once for at most the sum of
+  their pairwise overlap caps (:mod:`scheduler.overlap`, an upper bound of
+  the time two modes progress together), so the span after ``h`` is at least
+  ``sum X + sum Y - sum caps``.
+* **Coordination-diagram bound** once every arm's sequence is fixed, per
+  pair of arms (:func:`scheduler.kernel.exact_bb.diagram_bound`): the two
+  sequences laid end to end (tasks and travel) are the axes, every pair of
+  their windows in one resource a forbidden rectangle (and each precedence
+  between the two arms a forbidden quadrant), and the longest chain of
+  :func:`scheduler.overlap._chain` bounds the diagonal of every monotone
+  path with the overlap caps' König argument; releases and other arms are
+  left out (a relaxation), the earliest starts enter as heads. A coarse grid
+  is tried first: every cell side gives a bound.
+* **Order.** A first pass fixes modes and sequences and keeps every leaf
+  whose diagram bound is below the incumbent; the second searches the kept
+  leaves by increasing bound, so when it stops early every schedule better
+  than the best found lies in a leaf not yet finished, whose bound is at
+  least the current one: :attr:`Proof.bound` is then a lower bound of the
+  optimum (else the problem's :func:`scheduler.lower_bound` or ``lower``).
+* **Pruning** cuts a node whose bound is at least the best makespan less
+  1e-9 s: the optimum is proven to 1e-9 s.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -41,9 +101,12 @@ from scheduler.schedule import Schedule
 
 __all__ = [
     "ExactResult",
+    "Proof",
     "applicable",
     "branch_and_bound",
     "oracle_binding",
+    "prove",
+    "relevant_borders",
     "without_idle_oracle",
 ]
 
@@ -393,3 +456,687 @@ def branch_and_bound(
     return ExactResult(
         best_sched[0], best_mk[0], not stats["timeout"], int(stats["nodes"]), int(stats["pruned"])
     )
+
+
+@dataclass(frozen=True, slots=True)
+class Proof:
+    """The result of :func:`prove`.
+
+    Attributes
+    ----------
+    schedule : Schedule or None
+        The best schedule found (the incumbent given, if nothing better).
+    makespan : float
+        Its makespan (``inf`` when none).
+    bound : float
+        A lower bound of the optimum of the true problem: ``makespan`` when
+        ``proven``, else the root node's bound (or the ``lower`` given).
+    proven : bool
+        The search finished: ``makespan`` is the optimum (none below it by
+        more than 1e-9 s; with no schedule, none below ``upper``).
+    nodes : int
+        Search nodes visited (the deterministic work measure).
+    pruned : int
+        Nodes cut by their bound or an infeasible order.
+    seconds : float
+        Wall time.
+    reason : str
+        Why it stopped: ``"proven"``, ``"time"``, ``"nodes"``, ``"stopped"``,
+        ``"leaves"`` (more kept leaves than ``max_leaves``), or why the method
+        does not apply (then nothing was searched).
+    counts : tuple of (str, int)
+        Work by level: mode assignments completed, arm-sequence leaves reached
+        (``sequences``), kept for the second pass (``kept``) and searched.
+    """
+
+    schedule: Schedule | None
+    makespan: float
+    bound: float
+    proven: bool
+    nodes: int
+    pruned: int
+    seconds: float
+    reason: str
+    counts: tuple[tuple[str, int], ...] = ()
+
+
+def relevant_borders(problem: Problem, m: int, resources: frozenset[int]) -> tuple[float, ...]:
+    """The borders of mode ``m`` where a wait can matter: a window of a resource
+    in ``resources`` starts there, or it lies strictly inside such a movement
+    window. A wait at any other border can be moved to the next relevant one
+    (or dropped after the last) without lengthening any use of those
+    resources, the task or the schedule (see :mod:`scheduler.exact`)."""
+    sh = problem.shapes[m]
+    keep: set[float] = set()
+    for r, s, _ in (*sh.exclusive, *sh.moves):
+        if r not in resources:
+            continue
+        if 0.0 < s < sh.duration:
+            keep.add(s)
+    for r, s, e in sh.moves:
+        if r in resources:
+            keep.update(b for b in sh.borders if s < b < e)
+    return tuple(b for b in sh.borders if b in keep)
+
+
+class _ModeData:
+    """Per mode: time points (start, relevant borders, end) and the intervals of
+    the essential resources, as offsets from those points."""
+
+    def __init__(self, problem: Problem, m: int, resources: frozenset[int], waits: bool) -> None:
+        sh = problem.shapes[m]
+        self.borders = relevant_borders(problem, m, resources) if waits else ()
+        P = [0.0, *self.borders, sh.duration]
+        self.P = P
+        self.n_pts = len(P)
+        self.duration = sh.duration
+        self.border_index = [sh.borders.index(b) for b in self.borders]
+
+        def closing(x: float) -> tuple[int, float]:  # last point strictly before x (end)
+            j = max(k for k in range(len(P) - 1) if P[k] < x or k == 0)
+            return j, x - P[j]
+
+        def opening(x: float) -> tuple[int, float]:  # last point at or before x (start)
+            j = max(k for k in range(len(P) - 1) if P[k] <= x)
+            return j, x - P[j]
+
+        iv: list[tuple[int, int, float, int, float, float, float]] = []
+        for r, s, e in sh.exclusive:
+            if r in resources:
+                j0, o0 = opening(s)
+                j1, o1 = closing(e)
+                iv.append((r, j0, o0, j1, o1, e - s, sh.duration - e))
+        for r, s, e in sh.moves:
+            if r in resources:
+                cuts = [s, *(b for b in self.borders if s < b < e), e]
+                for a0, a1 in itertools.pairwise(cuts):
+                    j0, o0 = opening(a0)
+                    j1, o1 = closing(a1)
+                    iv.append((r, j0, o0, j1, o1, a1 - a0, sh.duration - a1))
+        for r in sh.tools:
+            if r in resources:
+                iv.append((r, 0, 0.0, len(P) - 1, 0.0, sh.duration, 0.0))
+        self.intervals = iv
+
+
+def prove(
+    problem: Problem,
+    time_limit: float | None = None,
+    max_nodes: int | None = None,
+    *,
+    incumbent: Schedule | None = None,
+    upper: float = math.inf,
+    lower: float = 0.0,
+    waits: bool = True,
+    progress: Any = None,
+    progress_every: float = 10.0,
+    stop: Any = None,
+    cap_step: float | None = None,
+    modes: Sequence[int] | None = None,
+    sequences: bool = True,
+    diagram_step: float | None = None,
+    max_leaves: int = 2_000_000,
+    plain_nodes: int = 100_000,
+) -> Proof:
+    """Prove the optimum by branch and bound (the exact method for compiled cells).
+
+    The problem is first reduced without changing its optimum (see the module
+    docstring): an idle blocking oracle is dropped (:func:`without_idle_oracle`),
+    dominated resources are left out
+    (:func:`scheduler.cpsat.essential_resources`) and only the borders where
+    a wait can matter get a time point (:func:`relevant_borders`). The search
+    then fixes a mode per task, then orders conflicting pairs (tasks of one
+    arm, intervals of different arms in one resource), pruning a node whose
+    bound (:func:`scheduler.kernel.exact_bb.node_bound`) reaches the best
+    makespan so far.
+
+    Parameters
+    ----------
+    problem : Problem
+    time_limit : float or None
+        Wall-clock limit, seconds (None: none).
+    max_nodes : int or None
+        Deterministic work limit: stop after this many nodes.
+    incumbent : Schedule or None
+        A valid schedule to start from (e.g. the tree search's plan): only
+        better ones are searched for, and its modes and start order are
+        tried first. It is validated here.
+    upper : float
+        Search only for schedules shorter than this.
+    lower : float
+        A known lower bound of the optimum (e.g. :func:`scheduler.reference.best_bound`):
+        the search stops as soon as a schedule meets it, and the bound reported
+        is at least it.
+    waits : bool
+        Whether arms may wait at zone borders (as :func:`scheduler.validate` allows).
+    progress : callable or None
+        Called with a one-line status every ``progress_every`` seconds.
+    stop : threading.Event or None
+        Stop early once set.
+
+    Returns
+    -------
+    Proof
+
+    Examples
+    --------
+    >>> from scheduler import solve, validate
+    >>> from scheduler.generate import random_problem
+    >>> p = random_problem(2, 6, 2, 1, seed=1)
+    >>> res = prove(p, time_limit=60)
+    >>> res.proven, validate(p, res.schedule) == res.makespan
+    (True, True)
+    >>> res.makespan <= solve(p, "tree", time_limit=1, seed=0).objective
+    True
+    """
+    from scheduler.cpsat import essential_resources
+    from scheduler.kernel import exact_bb as kb
+    from scheduler.overlap import overlap_caps
+    from scheduler.schedule import validate
+
+    t0 = time.perf_counter()
+    deadline = math.inf if time_limit is None else t0 + time_limit
+    if sequences and plain_nodes > 0:
+        # first the search without the sequence level, on a small budget: it
+        # proves problems with few conflicts at once and gives an incumbent
+        first = prove(
+            problem,
+            None if time_limit is None else time_limit / 4,
+            plain_nodes if max_nodes is None else min(plain_nodes, max_nodes // 4),
+            incumbent=incumbent,
+            upper=upper,
+            lower=lower,
+            waits=waits,
+            progress=progress,
+            progress_every=progress_every,
+            stop=stop,
+            cap_step=cap_step,
+            modes=modes,
+            sequences=False,
+        )
+        if first.proven or first.reason not in ("time", "nodes"):
+            return replace(first, seconds=time.perf_counter() - t0)
+        rest = prove(
+            problem,
+            None if time_limit is None else max(0.0, time_limit - first.seconds),
+            None if max_nodes is None else max(0, max_nodes - first.nodes),
+            incumbent=first.schedule if first.schedule is not None else incumbent,
+            upper=upper,
+            lower=lower,
+            waits=waits,
+            progress=progress,
+            progress_every=progress_every,
+            stop=stop,
+            cap_step=cap_step,
+            modes=modes,
+            sequences=True,
+            diagram_step=diagram_step,
+            max_leaves=max_leaves,
+            plain_nodes=0,
+        )
+        return replace(
+            rest,
+            nodes=first.nodes + rest.nodes,
+            pruned=first.pruned + rest.pruned,
+            seconds=time.perf_counter() - t0,
+            bound=max(first.bound, rest.bound) if not rest.proven else rest.bound,
+        )
+    p = without_idle_oracle(problem)
+    ok, why = applicable(p, max_tasks=10**9)
+    if not ok:
+        return Proof(None, math.inf, lower, False, 0, 0, 0.0, why)
+    T = p.n_tasks
+    best_mk = upper
+    best_sched: Schedule | None = None
+    inc_start = np.zeros(T)
+    inc_mode = [-1] * T
+    if incumbent is not None:
+        mk = validate(problem, incumbent)
+        inc_start = np.asarray(incumbent.start, dtype=float)
+        inc_mode = [int(m) for m in incumbent.mode]
+        if mk < best_mk:
+            best_mk, best_sched = mk, incumbent
+    if T == 0:
+        return Proof(Schedule.from_starts(p, [], []), 0.0, 0.0, True, 0, 0, 0.0, "proven")
+    resources = essential_resources(p)
+    shape = [_ModeData(p, m, resources, waits) for m in range(p.n_modes)]
+    mind = p.min_duration()
+    tails = np.zeros(T)
+    for t in reversed(p.topological_order):
+        for s in p.task_succs[t]:
+            tails[t] = max(tails[t], mind[s] + tails[s])
+    # the overlap caps (an upper bound on the time two modes of different arms
+    # progress at once); pairs sharing no resource: the shorter duration
+    mode_cap = np.zeros((p.n_modes, p.n_modes))
+    for m1 in range(p.n_modes):
+        for m2 in range(p.n_modes):
+            if p.mode_arm[m1] != p.mode_arm[m2]:
+                mode_cap[m1, m2] = min(p.mode_duration[m1], p.mode_duration[m2])
+    caps = overlap_caps(p, step=cap_step)
+    for (m1, m2), po in (caps or {}).items():
+        mode_cap[m1, m2] = mode_cap[m2, m1] = min(mode_cap[m1, m2], po.cap)
+    scratch = [np.zeros(T + 1) for _ in range(4)]
+    base = np.zeros(T, dtype=np.int64)
+    n_pts = 1
+    for t in range(T):
+        base[t] = n_pts
+        n_pts += max(shape[m].n_pts for m in p.task_modes[t])
+    n_iv = sum(max(len(shape[m].intervals) for m in p.task_modes[t]) for t in range(T))
+    # every branch adds one edge per pair of intervals or tasks, at most once on a path
+    max_edges = 4 * n_pts + 2 * len(p.task_preds) + sum(map(len, p.task_preds))
+    max_edges += n_iv * n_iv + T * T + 64
+    head = np.full(n_pts, -1, dtype=np.int64)
+    nxt = np.zeros(max_edges, dtype=np.int64)
+    src = np.zeros(max_edges, dtype=np.int64)
+    dst = np.zeros(max_edges, dtype=np.int64)
+    wt = np.zeros(max_edges)
+    ne = np.zeros(1, dtype=np.int64)
+    dist = np.zeros(n_pts)
+    queue = np.zeros(n_pts + 1, dtype=np.int64)
+    queued = np.zeros(n_pts, dtype=np.bool_)
+    mode_of = [-1] * T
+    stats = {"nodes": 0, "pruned": 0, "assignments": 0, "diagrams": 0, "searched": 0, "leaves": 0}
+    reason = [""]
+    last_report = [t0]
+    node_limit = math.inf if max_nodes is None else max_nodes
+
+    def add(u: int, v: int, w: float) -> bool:
+        if ne[0] >= len(src):
+            raise RuntimeError("edge store full")  # pragma: no cover - sized above
+        return bool(kb.stn_add(head, nxt, src, dst, wt, ne, dist, queue, queued, u, v, w))
+
+    def exhausted() -> bool:
+        if reason[0]:
+            return True
+        now = time.perf_counter()
+        if now > deadline:
+            reason[0] = "time"
+        elif stats["nodes"] >= node_limit:
+            reason[0] = "nodes"
+        elif stop is not None and stop.is_set():
+            reason[0] = "stopped"
+        elif best_mk <= lower + _EPS:
+            reason[0] = "met the lower bound"
+        if progress is not None and now - last_report[0] >= progress_every:
+            last_report[0] = now
+            progress(
+                f"exact: {now - t0:.0f} s, {stats['nodes']:,} nodes, "
+                f"{stats['pruned']:,} pruned, {stats['assignments']:,} mode assignments, "
+                f"{stats['diagrams']:,} sequences, {len(leaves):,} kept, "
+                f"{stats['searched']:,} searched, "
+                f"best {best_mk:.3f}"
+            )
+        return bool(reason[0])
+
+    def end_pt(t: int) -> int:
+        return int(base[t]) + shape[mode_of[t]].n_pts - 1
+
+    # ---- phase 2 arrays (filled when every mode is fixed)
+    def phase2_arrays() -> dict[str, Any]:
+        t_start = base.copy()
+        t_end = np.array([end_pt(t) for t in range(T)], dtype=np.int64)
+        t_arm = np.array([int(p.mode_arm[mode_of[t]]) for t in range(T)], dtype=np.int64)
+        t_dur = np.array([shape[mode_of[t]].duration for t in range(T)])
+        setup = np.full((T, T), np.inf)
+        for x in range(T):
+            for y in range(T):
+                if x != y and t_arm[x] == t_arm[y]:
+                    setup[x, y] = p.setup_time(int(t_arm[x]), x, y)
+        t_setin = np.zeros(T)
+        for t in range(T):
+            ins = [setup[x, t] for x in range(T) if x != t and t_arm[x] == t_arm[t]]
+            t_setin[t] = min(ins) if ins else 0.0
+        rows: list[tuple[int, int, int, float, int, float, float, float]] = []
+        for t in range(T):
+            md = shape[mode_of[t]]
+            for r, j0, o0, j1, o1, ln, tl in md.intervals:
+                rows.append((r, t, int(base[t]) + j0, o0, int(base[t]) + j1, o1, ln, tl))
+        rows.sort(key=lambda x: (x[0], x[2], x[1]))
+        lo = [0]
+        for k in range(1, len(rows)):
+            if rows[k][0] != rows[k - 1][0]:
+                lo.append(k)
+        lo.append(len(rows))
+        n = max(len(rows), T) + 1
+        return {
+            "t_start": t_start,
+            "t_end": t_end,
+            "t_arm": t_arm,
+            "t_dur": t_dur,
+            "t_tail": tails.copy(),
+            "t_setin": t_setin,
+            "cap": np.array(
+                [[mode_cap[mode_of[x], mode_of[y]] for y in range(T)] for x in range(T)]
+            ),
+            "th": np.zeros(T),
+            "setup": setup,
+            "i_lo": np.array(lo if rows else [0], dtype=np.int64),
+            "i_task": np.array([x[1] for x in rows], dtype=np.int64),
+            "i_ps": np.array([x[2] for x in rows], dtype=np.int64),
+            "i_os": np.array([x[3] for x in rows]),
+            "i_pe": np.array([x[4] for x in rows], dtype=np.int64),
+            "i_oe": np.array([x[5] for x in rows]),
+            "i_len": np.array([x[6] for x in rows]),
+            "i_tail": np.array([x[7] for x in rows]),
+            "h": np.zeros(n),
+            "ln": np.zeros(n),
+            "tl": np.zeros(n),
+            "ex": np.zeros(n),
+            "out": np.zeros(6),
+        }
+
+    def bound2(a: dict[str, Any]) -> float:
+        return float(
+            kb.node_bound(
+                dist, a["t_start"], a["t_end"], a["t_arm"], a["t_dur"], a["t_tail"],
+                a["t_setin"], p.n_arms, a["cap"], a["th"], a["i_lo"], a["i_task"], a["i_ps"], a["i_os"],
+                a["i_len"], a["i_tail"], a["h"], a["ln"], a["tl"], a["ex"],
+            )
+        )  # fmt: skip
+
+    def record() -> None:
+        nonlocal best_mk, best_sched
+        mk = max(float(dist[end_pt(t)]) for t in range(T))
+        if mk >= best_mk - _EPS:
+            return
+        starts = [float(dist[base[t]]) for t in range(T)]
+        ws = []
+        for t in range(T):
+            md = shape[mode_of[t]]
+            w = np.zeros(len(p.shapes[mode_of[t]].borders))
+            for j in range(1, md.n_pts - 1):
+                gap = dist[base[t] + j] - dist[base[t] + j - 1] - (md.P[j] - md.P[j - 1])
+                w[md.border_index[j - 1]] = max(0.0, float(gap))
+            ws.append(w)
+        sched = Schedule.from_starts(p, list(mode_of), starts, ws)
+        best_mk = validate(problem, sched)
+        best_sched = sched
+
+    def disjunctive(a: dict[str, Any], floor: float = 0.0) -> None:
+        if exhausted():
+            return
+        stats["nodes"] += 1
+        if max(floor, bound2(a)) >= best_mk - _EPS:
+            stats["pruned"] += 1
+            return
+        out = a["out"]
+        if not kb.conflict(
+            dist, a["t_start"], a["t_end"], a["t_arm"], a["setup"], a["i_lo"], a["i_task"],
+            a["i_ps"], a["i_os"], a["i_pe"], a["i_oe"], out,
+        ):  # fmt: skip
+            record()
+            return
+        b1 = (int(out[0]), int(out[1]), float(out[4]))
+        b2 = (int(out[2]), int(out[3]), float(out[5]))
+        # the incumbent's order first: the branch whose later point comes later there
+        tx = int(np.searchsorted(base, b1[0], side="right")) - 1
+        ty = int(np.searchsorted(base, b1[1], side="right")) - 1
+        if inc_start[ty] < inc_start[tx]:
+            b1, b2 = b2, b1
+        for u, v, w in (b1, b2):
+            saved = dist.copy()
+            keep = int(ne[0])
+            if add(u, v, w):
+                disjunctive(a, floor)
+            else:
+                stats["pruned"] += 1
+            kb.stn_pop(head, nxt, src, ne, keep)
+            dist[:] = saved
+            if reason[0]:
+                return
+
+    order = list(p.topological_order)
+
+    def bound1(i: int) -> float:
+        b = 0.0
+        t_arm = np.full(T, -1, dtype=np.int64)
+        th = np.zeros(T)
+        t_dur = np.zeros(T)
+        cap = np.zeros((T, T))
+        done = order[:i]
+        for t in done:
+            b = max(b, float(dist[end_pt(t)]) + tails[t])
+            t_arm[t] = int(p.mode_arm[mode_of[t]])
+            th[t] = dist[base[t]]
+            t_dur[t] = shape[mode_of[t]].duration
+        for x in done:
+            for y in done:
+                cap[x, y] = mode_cap[mode_of[x], mode_of[y]]
+        # unassigned tasks are on no arm (-1) and left out
+        ab = kb.arm_bound(th, t_arm, t_dur, tails, np.zeros(T), cap, p.n_arms, *scratch)
+        return max(b, float(ab))
+
+    presence = np.array(
+        [r < p.n_zones or r >= 2 * p.n_zones for r in range(2 * p.n_zones + p.n_tools)],
+        dtype=np.bool_,
+    )
+    nominal = []  # per mode: (res, s, e) arrays of its intervals, offsets from its start
+    for md in shape:
+        rows_ = [(r, md.P[j0] + o0, md.P[j1] + o1) for r, j0, o0, j1, o1, _, _ in md.intervals]
+        nominal.append(
+            (
+                np.array([x[0] for x in rows_], dtype=np.int64),
+                np.array([x[1] for x in rows_]),
+                np.array([x[2] for x in rows_]),
+            )
+        )
+    loads = [0.0] * p.n_arms
+    for t in range(T):
+        for m in p.task_modes[t]:
+            loads[int(p.mode_arm[m])] += float(p.mode_duration[m]) / len(p.task_modes[t])
+    step = diagram_step if diagram_step is not None else max(max(loads) / 400.0, 1e-6)
+
+    def laid_out(arm: int, seq: list[int]) -> tuple[float, dict[int, float], list[Any]]:
+        """The arm's progress axis: its tasks and travel end to end."""
+        off = p.setup_time(arm, -1, seq[0]) if seq else 0.0
+        at: dict[int, float] = {}
+        parts = []
+        prev = -1
+        for t in seq:
+            if prev >= 0:
+                off += p.setup_time(arm, prev, t)
+            at[t] = off
+            r, s0, e0 = nominal[mode_of[t]]
+            parts.append((r, s0 + off, e0 + off))
+            off += shape[mode_of[t]].duration
+            prev = t
+        return off, at, parts
+
+    def diagram_bound(seqs: list[list[int]]) -> float:
+        """The largest coordination-diagram bound over pairs of arms (-1: infeasible)."""
+        outs = [laid_out(arm, seq) for arm, seq in enumerate(seqs)]
+        best = 0.0
+        for x in range(p.n_arms):
+            for y in range(x + 1, p.n_arms):
+                if not seqs[x] or not seqs[y]:
+                    continue
+                la, at_a, pa = outs[x]
+                lb, at_b, pb = outs[y]
+                pd, pe, ps = [], [], []
+                for t in seqs[y]:
+                    for q in p.task_preds[t]:
+                        if q in at_a:
+                            pd.append(0)
+                            pe.append(at_a[q] + shape[mode_of[q]].duration)
+                            ps.append(at_b[t])
+                for t in seqs[x]:
+                    for q in p.task_preds[t]:
+                        if q in at_b:
+                            pd.append(1)
+                            pe.append(at_b[q] + shape[mode_of[q]].duration)
+                            ps.append(at_a[t])
+                heads = [
+                    (
+                        np.array([at[t] for t in sq]),
+                        np.array([float(dist[base[t]]) for t in sq]),
+                    )
+                    for at, sq in ((at_a, seqs[x]), (at_b, seqs[y]))
+                ]
+                args = (
+                    la, lb,
+                    np.concatenate([r for r, _, _ in pa]), np.concatenate([s for _, s, _ in pa]),
+                    np.concatenate([e for _, _, e in pa]), np.concatenate([r for r, _, _ in pb]),
+                    np.concatenate([s for _, s, _ in pb]), np.concatenate([e for _, _, e in pb]),
+                    presence, np.array(pd, dtype=np.int64), np.array(pe, dtype=float),
+                    np.array(ps, dtype=float), heads[0][0], heads[0][1], heads[1][0],
+                    heads[1][1],
+                )  # fmt: skip
+                # a coarse grid first (any cell side gives a bound), the fine one if needed
+                low = kb.diagram_bound(*args, 4.0 * step, best_mk - _EPS)
+                if 0 <= low < best_mk - _EPS:
+                    low = kb.diagram_bound(*args, step, best_mk - _EPS)
+                if low < 0:
+                    return -1.0
+                best = max(best, float(low))
+        return best
+
+    def sequence(a: dict[str, Any], arms: list[list[int]], k: int, seq: list[int]) -> None:
+        """Fix each arm's task sequence (arm ``k`` is being built as ``seq``;
+        the arms before it are in ``done_seqs``)."""
+        if exhausted():
+            return
+        stats["nodes"] += 1
+        if bound2(a) >= best_mk - _EPS:
+            stats["pruned"] += 1
+            return
+        if len(seq) == len(arms[k]):
+            done_seqs.append(list(seq))
+            if k + 1 < p.n_arms:
+                sequence(a, arms, k + 1, [])
+            else:
+                floor = diagram_bound(done_seqs)
+                stats["diagrams"] += 1
+                if floor < 0 or floor >= best_mk - _EPS:
+                    stats["pruned"] += 1
+                elif not math.isfinite(best_mk):  # no schedule yet: search this leaf now
+                    stats["searched"] += 1
+                    disjunctive(a, floor)
+                else:
+                    leaves.append((floor, tuple(mode_of), [list(q) for q in done_seqs]))
+            done_seqs.pop()
+            return
+        rest = sorted(set(arms[k]) - set(seq), key=lambda t: (inc_start[t], t))
+        for y in rest:
+            saved = dist.copy()
+            keep = int(ne[0])
+            ok = True
+            if seq:
+                x = seq[-1]
+                ok = add(int(a["t_end"][x]), int(a["t_start"][y]), p.setup_time(k, x, y))
+            if ok:
+                seq.append(y)
+                sequence(a, arms, k, seq)
+                seq.pop()
+            else:
+                stats["pruned"] += 1
+            kb.stn_pop(head, nxt, src, ne, keep)
+            dist[:] = saved
+            if reason[0]:
+                return
+
+    done_seqs: list[list[int]] = []
+
+    def place(t: int, m: int) -> bool:
+        """Add the time points' edges of task ``t`` in mode ``m`` (``mode_of[t] == m``)."""
+        md = shape[m]
+        arm = int(p.mode_arm[m])
+        first = int(base[t])
+        release = max(
+            float(p.task_release[t]), float(p.arm_available[arm]) + p.setup_time(arm, -1, t)
+        )
+        ok = add(0, first, release)
+        for j in range(1, md.n_pts):
+            step = md.P[j] - md.P[j - 1]
+            ok = add(first + j - 1, first + j, step) and ok
+            if j == md.n_pts - 1:  # no wait at the end: the task ends on time
+                ok = add(first + j, first + j - 1, -step) and ok
+        for q in p.task_preds[t]:
+            ok = add(end_pt(q), first, 0.0) and ok
+        return ok
+
+    # (floor, modes, sequences) of every leaf of the first pass not cut by its bound
+    leaves: list[tuple[float, tuple[int, ...], list[list[int]]]] = []
+
+    def choose(i: int) -> None:
+        if exhausted():
+            return
+        if i == T:
+            stats["assignments"] += 1
+            a = phase2_arrays()
+            if sequences:
+                arms = [[t for t in range(T) if a["t_arm"][t] == arm] for arm in range(p.n_arms)]
+                sequence(a, arms, 0, [])
+                if len(leaves) > max_leaves:
+                    reason[0] = "leaves"
+            else:
+                disjunctive(a)
+            return
+        t = order[i]
+        allowed = p.task_modes[t] if modes is None else (int(modes[t]),)
+        cands = sorted(allowed, key=lambda m: (m != inc_mode[t], p.mode_duration[m]))
+        for m in cands:
+            stats["nodes"] += 1
+            mode_of[t] = m
+            saved = dist.copy()
+            keep = int(ne[0])
+            ok = place(t, m)
+            if ok and bound1(i + 1) < best_mk - _EPS:
+                choose(i + 1)
+            else:
+                stats["pruned"] += 1
+            kb.stn_pop(head, nxt, src, ne, keep)
+            dist[:] = saved
+            mode_of[t] = -1
+            if reason[0]:
+                return
+
+    choose(0)
+    floor_now = -math.inf  # the floor of the leaf searched when the second pass stopped
+    if sequences and not reason[0]:
+        # second pass: the leaves by increasing floor; every schedule better than
+        # the best lies in a leaf not yet searched, so its floor bounds the optimum
+        leaves.sort(key=lambda x: x[0])
+        stats["leaves"] = len(leaves)
+        for floor, ms, seqs in leaves:
+            if floor >= best_mk - _EPS or reason[0]:
+                break
+            floor_now = floor
+            kb.stn_pop(head, nxt, src, ne, 0)
+            dist[:] = 0.0
+            ok = True
+            for t in order:
+                mode_of[t] = ms[t]
+                ok = place(t, ms[t]) and ok
+            a = phase2_arrays()
+            for arm, sq in enumerate(seqs):
+                for x, y in itertools.pairwise(sq):
+                    ok = add(end_pt(x), int(base[y]), p.setup_time(arm, x, y)) and ok
+            stats["searched"] += 1
+            if ok:
+                disjunctive(a, floor)
+    proven = not reason[0] or reason[0] == "met the lower bound"
+    root = max(lower, float(lower_bound_of(p)))
+    bound = best_mk if proven else min(best_mk, max(root, floor_now))
+    return Proof(
+        best_sched,
+        best_mk,
+        bound,
+        proven,
+        int(stats["nodes"]),
+        int(stats["pruned"]),
+        time.perf_counter() - t0,
+        "proven" if proven else reason[0],
+        (
+            ("assignments", int(stats["assignments"])),
+            ("sequences", int(stats["diagrams"])),
+            ("kept", len(leaves)),
+            ("searched", int(stats["searched"])),
+        ),
+    )
+
+
+def lower_bound_of(problem: Problem) -> float:
+    """:func:`scheduler.lower_bound` (imported late: it imports this module's users)."""
+    from scheduler.bounds import lower_bound
+
+    return float(lower_bound(problem))

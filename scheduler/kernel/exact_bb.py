@@ -1,0 +1,446 @@
+"""Compiled pieces of the exact branch and bound (:func:`scheduler.exact.prove`).
+
+A simple temporal network (STN) kept as arrays: time points, edges
+``x[v] >= x[u] + w`` in per-source linked lists, earliest times ``dist``
+(longest paths from the origin, point 0). An edge is added with
+:func:`stn_add` (incremental label correcting from its head; a positive
+cycle, i.e. an infeasible branch, shows as the edge's own tail growing) and
+edges are removed last-in first-out with :func:`stn_pop`. :func:`conflict`
+finds the pair of orders to branch on and :func:`node_bound` the node's lower
+bound (see :mod:`scheduler.exact` for why each is exact).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from scheduler.kernel._jit import njit
+from scheduler.overlap import _chain
+
+__all__ = ["arm_bound", "conflict", "diagram_bound", "node_bound", "stn_add", "stn_pop"]
+
+_EPS = 1e-9
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def stn_add(
+    head: Any,
+    nxt: Any,
+    src: Any,
+    dst: Any,
+    wt: Any,
+    ne: Any,
+    dist: Any,
+    queue: Any,
+    queued: Any,
+    u: int,
+    v: int,
+    w: float,
+) -> bool:  # pragma: no cover - compiled
+    """Add ``x[v] >= x[u] + w`` (edge number ``ne[0]``); False on a positive cycle.
+
+    The edge stays in either case (pop it with :func:`stn_pop`). First-in
+    first-out label correcting from ``v`` (``queue`` holds ``len(dist) + 1``
+    points, ``queued`` all False on entry and on return): the network had no
+    positive cycle before, so any new one runs through the new edge and
+    shows as ``x[u]`` growing; without one, every point is queued at most
+    ``len(dist)`` times, so the count limit is only a safety net (hitting it
+    also reports a cycle).
+    """
+    e = ne[0]
+    src[e] = u
+    dst[e] = v
+    wt[e] = w
+    nxt[e] = head[u]
+    head[u] = e
+    ne[0] = e + 1
+    if dist[u] + w <= dist[v] + _EPS:
+        return True
+    n = len(dist)
+    cap = len(queue)
+    dist[v] = dist[u] + w
+    lo = 0
+    size = 1
+    queue[0] = v
+    queued[v] = True
+    count = 0
+    limit = n * n + 100
+    ok = True
+    while size > 0:
+        x = queue[lo]
+        lo = (lo + 1) % cap
+        size -= 1
+        queued[x] = False
+        if not ok:
+            continue  # drain, so that queued is all False again
+        dx = dist[x]
+        f = head[x]
+        while f >= 0:
+            y = dst[f]
+            if dx + wt[f] > dist[y] + _EPS:
+                if y == u:
+                    ok = False
+                    break
+                dist[y] = dx + wt[f]
+                if not queued[y]:
+                    queue[(lo + size) % cap] = y
+                    size += 1
+                    queued[y] = True
+                    count += 1
+                    if count > limit:
+                        ok = False
+                        break
+            f = nxt[f]
+    return ok
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def stn_pop(head: Any, nxt: Any, src: Any, ne: Any, keep: int) -> None:  # pragma: no cover
+    """Remove the edges added after the first ``keep`` (last in, first out)."""
+    e = ne[0] - 1
+    while e >= keep:
+        head[src[e]] = nxt[e]
+        e -= 1
+    ne[0] = keep
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def conflict(
+    dist: Any,
+    t_start: Any,
+    t_end: Any,
+    t_arm: Any,
+    setup: Any,
+    i_lo: Any,
+    i_task: Any,
+    i_ps: Any,
+    i_os: Any,
+    i_pe: Any,
+    i_oe: Any,
+    out: Any,
+) -> int:  # pragma: no cover - compiled
+    """The conflict to branch on at the earliest times ``dist``; 0 when none.
+
+    Tasks ``t`` (start point ``t_start[t]``, end point ``t_end[t]``, arm
+    ``t_arm[t]``; ``setup[t, t']`` the travel between them, ``inf`` across
+    arms) conflict when both orders are violated; intervals (grouped by
+    resource: group ``g`` is ``i_lo[g]:i_lo[g+1]``, each from point
+    ``i_ps`` plus ``i_os`` to point ``i_pe`` plus ``i_oe``) of tasks of
+    different arms conflict when they overlap. The one picked is the
+    earliest (smallest start of the pair's later interval, then the largest
+    overlap). ``out`` receives ``u1, v1, u2, v2`` and ``w1, w2`` at
+    ``out[4:6]``: branch 1 adds ``x[v1] >= x[u1] + w1``, branch 2 the other.
+    Returns 1 when a conflict was found.
+    """
+    found = 0
+    best_key = np.inf
+    best_ov = -1.0
+    T = len(t_start)
+    for x in range(T):
+        for y in range(x + 1, T):
+            if t_arm[x] != t_arm[y]:
+                continue
+            sx = dist[t_start[x]]
+            ex = dist[t_end[x]]
+            sy = dist[t_start[y]]
+            ey = dist[t_end[y]]
+            a = ex + setup[x, y]
+            b = ey + setup[y, x]
+            if sy < a - _EPS and sx < b - _EPS:
+                key = max(sx, sy)
+                ov = min(a - sy, b - sx)
+                if key < best_key - _EPS or (key < best_key + _EPS and ov > best_ov):
+                    best_key = key
+                    best_ov = ov
+                    found = 1
+                    out[0] = t_end[x]
+                    out[1] = t_start[y]
+                    out[4] = setup[x, y]
+                    out[2] = t_end[y]
+                    out[3] = t_start[x]
+                    out[5] = setup[y, x]
+    G = len(i_lo) - 1
+    for g in range(G):
+        for i in range(i_lo[g], i_lo[g + 1]):
+            s1 = dist[i_ps[i]] + i_os[i]
+            e1 = dist[i_pe[i]] + i_oe[i]
+            for j in range(i + 1, i_lo[g + 1]):
+                if t_arm[i_task[i]] == t_arm[i_task[j]]:
+                    continue
+                s2 = dist[i_ps[j]] + i_os[j]
+                e2 = dist[i_pe[j]] + i_oe[j]
+                if s1 < e2 - _EPS and s2 < e1 - _EPS:
+                    key = max(s1, s2)
+                    ov = min(e1, e2) - key
+                    if key < best_key - _EPS or (key < best_key + _EPS and ov > best_ov):
+                        best_key = key
+                        best_ov = ov
+                        found = 1
+                        out[0] = i_pe[i]
+                        out[1] = i_ps[j]
+                        out[4] = i_oe[i] - i_os[j]
+                        out[2] = i_pe[j]
+                        out[3] = i_ps[i]
+                        out[5] = i_oe[j] - i_os[i]
+    return found
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def _one_machine(
+    head: Any, length: Any, tail: Any, extra: Any, n: int
+) -> float:  # pragma: no cover
+    """``max_k head_k + sum_{head_j >= head_k} (length_j + extra_j) - max extra_j
+    + min tail_j`` over the first ``n`` items: a one-machine bound (each
+    item's ``extra``, a least travel before it, counted for all but one)."""
+    if n == 0:
+        return 0.0
+    order = np.argsort(head[:n])
+    best = 0.0
+    total = 0.0
+    mt = np.inf
+    mx = 0.0
+    for k in range(n - 1, -1, -1):
+        i = order[k]
+        total += length[i] + extra[i]
+        mt = min(mt, tail[i])
+        mx = max(mx, extra[i])
+        best = max(best, head[i] + total - mx + mt)
+    return best
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def arm_bound(
+    th: Any,
+    t_arm: Any,
+    t_dur: Any,
+    t_tail: Any,
+    t_setin: Any,
+    cap: Any,
+    n_arms: int,
+    h: Any,
+    ln: Any,
+    tl: Any,
+    ex: Any,
+) -> float:  # pragma: no cover - compiled
+    """Arm bounds of the tasks with ``t_arm >= 0`` (earliest starts ``th``).
+
+    Per arm, the one-machine bound (nominal durations, least travel into each
+    task counted for all but one). Per pair of arms ``A, B`` and threshold
+    ``h``: the tasks ``X`` of ``A`` and ``Y`` of ``B`` that start at ``h`` or
+    later all progress inside ``[h, C - q)`` (``q`` their least tail), ``A``
+    for ``sum X`` and ``B`` for ``sum Y``, both at once for at most
+    ``sum cap[x, y]`` (the overlap caps of :mod:`scheduler.overlap`), so
+    ``C >= h + sum X + sum Y - sum cap + q``.
+    """
+    T = len(th)
+    best = 0.0
+    for a in range(n_arms):
+        n = 0
+        for t in range(T):
+            if t_arm[t] == a:
+                h[n] = th[t]
+                ln[n] = t_dur[t]
+                tl[n] = t_tail[t]
+                ex[n] = t_setin[t]
+                n += 1
+        best = max(best, float(_one_machine(h, ln, tl, ex, n)))
+    order = np.argsort(th)
+    seen = np.zeros(T, dtype=np.bool_)
+    for a in range(n_arms):
+        for b in range(a + 1, n_arms):
+            sa = 0.0
+            sb = 0.0
+            ca = 0.0
+            cb = 0.0
+            xa = 0.0
+            xb = 0.0
+            caps = 0.0
+            qmin = np.inf
+            seen[:] = False
+            for k in range(T - 1, -1, -1):
+                x = order[k]
+                if t_arm[x] != a and t_arm[x] != b:
+                    continue
+                for y in range(T):
+                    if seen[y] and t_arm[y] != t_arm[x]:
+                        caps += cap[x, y]
+                seen[x] = True
+                if t_arm[x] == a:
+                    sa += t_dur[x]
+                    ca += t_setin[x]
+                    xa = max(xa, t_setin[x])
+                else:
+                    sb += t_dur[x]
+                    cb += t_setin[x]
+                    xb = max(xb, t_setin[x])
+                qmin = min(qmin, t_tail[x])
+                span = max(sa + ca - xa, sb + cb - xb, sa + sb - caps)
+                best = max(best, th[x] + span + qmin)
+    return best
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def node_bound(
+    dist: Any,
+    t_start: Any,
+    t_end: Any,
+    t_arm: Any,
+    t_dur: Any,
+    t_tail: Any,
+    t_setin: Any,
+    n_arms: int,
+    cap: Any,
+    th: Any,
+    i_lo: Any,
+    i_task: Any,
+    i_ps: Any,
+    i_os: Any,
+    i_len: Any,
+    i_tail: Any,
+    h: Any,
+    ln: Any,
+    tl: Any,
+    ex: Any,
+) -> float:  # pragma: no cover - compiled
+    """A lower bound of every completion of the node (see :mod:`scheduler.exact`).
+
+    The largest of: each task's earliest end plus its tail; per arm, the
+    one-machine bound of its tasks (earliest starts, nominal durations, least
+    travel into each, tails); per resource group, the one-machine bound of
+    its intervals (earliest starts, nominal lengths, the rest of the task
+    after the interval plus the task's tail).
+    """
+    T = len(t_start)
+    best = 0.0
+    for t in range(T):
+        best = max(best, dist[t_end[t]] + t_tail[t])
+    for t in range(T):
+        th[t] = dist[t_start[t]]
+    best = max(
+        best, float(arm_bound(th, t_arm, t_dur, t_tail, t_setin, cap, n_arms, h, ln, tl, ex))
+    )
+    G = len(i_lo) - 1
+    for g in range(G):
+        n = 0
+        for i in range(i_lo[g], i_lo[g + 1]):
+            h[n] = dist[i_ps[i]] + i_os[i]
+            ln[n] = i_len[i]
+            tl[n] = i_tail[i] + t_tail[i_task[i]]
+            ex[n] = 0.0
+            n += 1
+        best = max(best, float(_one_machine(h, ln, tl, ex, n)))
+    return best
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def _mark(
+    flags: Any, s1: float, e1: float, s2: float, e2: float, step: float
+) -> None:  # pragma: no cover - compiled
+    """Set the cells lying entirely inside the open rectangle (as :mod:`scheduler.overlap`)."""
+    n, m = flags.shape
+    i0 = max(int(np.floor(s1 / step)) + 1, 0)
+    i1 = min(int(np.ceil(e1 / step)) - 2, n - 1)
+    j0 = max(int(np.floor(s2 / step)) + 1, 0)
+    j1 = min(int(np.ceil(e2 / step)) - 2, m - 1)
+    for i in range(i0, i1 + 1):
+        for j in range(j0, j1 + 1):
+            flags[i, j] = True
+
+
+# not cached: it calls scheduler.overlap._chain, and numba checks a cached
+# function against its own file only (a stale _chain would be kept)
+@njit(cache=False)  # type: ignore[untyped-decorator]
+def diagram_bound(
+    la: float,
+    lb: float,
+    a_res: Any,
+    a_s: Any,
+    a_e: Any,
+    b_res: Any,
+    b_s: Any,
+    b_e: Any,
+    presence: Any,
+    p_dir: Any,
+    p_end: Any,
+    p_start: Any,
+    a_at: Any,
+    a_head: Any,
+    b_at: Any,
+    b_head: Any,
+    step: float,
+    cut: float,
+    max_cells: float = 160_000.0,
+) -> float:  # pragma: no cover - compiled
+    """A lower bound of the makespan from the coordination diagram of two arms'
+    whole sequences (-1: no path, the sequences are infeasible).
+
+    Arm A's progress axis has length ``la`` (its tasks and travel end to end),
+    B's ``lb``; windows ``(res, s, e)`` are offsets on those axes. Two windows
+    in one resource forbid their open rectangle (blocked when
+    ``presence[res]``: an exclusive zone or a tool; else closed to diagonal
+    steps: movement in a shared zone). A precedence ``k`` with ``p_dir[k] ==
+    0`` (a task of A before one of B) forbids ``u < p_end[k]`` together with
+    ``v > p_start[k]`` (axes swapped when ``p_dir[k] == 1``). A schedule is a
+    monotone path from ``(0, 0)`` to ``(la, lb)`` taking ``la + lb - D`` time
+    at least, ``D`` its diagonal, and the longest chain of
+    :func:`scheduler.overlap._chain` times ``step`` bounds ``D``
+    (:mod:`scheduler.overlap`'s argument). Heads: A's task starting at
+    progress ``a_at[k]`` starts no earlier than ``a_head[k]``; when the path
+    crosses ``u = a_at[k]`` at ``v`` in cell row ``j``, the time is at least
+    ``max(a_head[k], a_at[k], j step)`` and what is left takes at least
+    ``la - a_at[k] + lb - (j + 1) step`` less the chain from that cell to the
+    end; the least over ``j`` bounds the makespan (B's heads likewise).
+    Returns as soon as the bound reaches ``cut``. The cell side is raised so
+    that the grid has at most ``max_cells`` cells (any side gives a bound).
+    """
+    step = max(step, np.sqrt(la * lb / max_cells))
+    n = max(1, int(np.ceil(la / step - 1e-9)))
+    m = max(1, int(np.ceil(lb / step - 1e-9)))
+    blocked = np.zeros((n, m), dtype=np.bool_)
+    nodiag = np.zeros((n, m), dtype=np.bool_)
+    for i in range(len(a_res)):
+        for j in range(len(b_res)):
+            if a_res[i] != b_res[j]:
+                continue
+            if presence[a_res[i]]:
+                _mark(blocked, a_s[i], a_e[i], b_s[j], b_e[j], step)
+            _mark(nodiag, a_s[i], a_e[i], b_s[j], b_e[j], step)
+    for k in range(len(p_dir)):
+        if p_dir[k] == 0:
+            _mark(blocked, -2.0 * step, p_end[k], p_start[k], lb + 2.0 * step, step)
+        else:
+            _mark(blocked, p_start[k], la + 2.0 * step, -2.0 * step, p_end[k], step)
+    if blocked[0, 0] or blocked[n - 1, m - 1]:
+        return -1.0
+    table = _chain(blocked, nodiag)
+    if table[n - 1, m - 1] < 0:
+        return -1.0
+    best = la + lb - min(float(table[n - 1, m - 1]) * step, la, lb)
+    if len(a_at) + len(b_at) == 0 or best >= cut:
+        return best
+    back = _chain(
+        np.ascontiguousarray(blocked[::-1, ::-1]), np.ascontiguousarray(nodiag[::-1, ::-1])
+    )[::-1, ::-1]
+    for k in range(len(a_at)):
+        i = min(max(int(np.floor(a_at[k] / step)), 0), n - 1)
+        low = np.inf
+        for j in range(m):
+            if back[i, j] < 0:
+                continue
+            rest = la - a_at[k] + lb - (j + 1) * step - back[i, j] * step
+            low = min(low, max(a_head[k], a_at[k], j * step) + max(rest, 0.0))
+        if low < np.inf:
+            best = max(best, low)
+    for k in range(len(b_at)):
+        j = min(max(int(np.floor(b_at[k] / step)), 0), m - 1)
+        low = np.inf
+        for i in range(n):
+            if back[i, j] < 0:
+                continue
+            rest = lb - b_at[k] + la - (i + 1) * step - back[i, j] * step
+            low = min(low, max(b_head[k], b_at[k], i * step) + max(rest, 0.0))
+        if low < np.inf:
+            best = max(best, low)
+    return best
