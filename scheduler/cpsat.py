@@ -531,6 +531,9 @@ def _run_beside(solver: Any, solve: Callable[[], Any], ctrl_c: _ctrl_c.CtrlC) ->
                 done.wait(0.05)
             except KeyboardInterrupt:
                 interrupted = True
+    # a Ctrl-C noted after the last look above (the search had just ended) is
+    # only pending in the block: it still counts
+    interrupted = interrupted or ctrl_c.hit
     if "error" in box:
         raise box["error"]
     return box["code"], interrupted

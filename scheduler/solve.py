@@ -276,7 +276,7 @@ def solve(
     t0 = time.perf_counter()
     # Ctrl-C is noted for the whole solve, so that one whose KeyboardInterrupt
     # is lost on the way still ends the search (scheduler._ctrl_c)
-    with _ctrl_c.guard():
+    with _ctrl_c.guard() as ctrl_c:
         try:
             # a KeyboardInterrupt inside numba's compiler can break its state
             # for the rest of the process: a Ctrl-C there is raised after it
@@ -292,7 +292,13 @@ def solve(
                     progress(Progress(t, objective, min(lb, objective), solver))
 
             _result._LISTENER[0] = listener
-            return bind_result(spec.run(problem, time_limit, seed, waits, options, extra), problem)
+            res = bind_result(spec.run(problem, time_limit, seed, waits, options, extra), problem)
+            if ctrl_c.hit:
+                # a Ctrl-C came during the solve and its exception was lost or
+                # only noted (a finaliser, a deferred block that had just ended):
+                # the caller must still see it
+                res.stats.interrupted = True
+            return res
         except KeyboardInterrupt:
             # solvers that keep a best schedule return it themselves; here nothing was kept
             stats = SearchStats(interrupted=True)
