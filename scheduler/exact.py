@@ -92,6 +92,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -639,11 +640,9 @@ def prove(
     if sequences and plain_nodes > 0:
         # first the search without the sequence level, on a small budget: it
         # proves problems with few conflicts at once and gives an incumbent
-        first = prove(
+        again = partial(
+            prove,
             problem,
-            None if time_limit is None else time_limit / 4,
-            plain_nodes if max_nodes is None else min(plain_nodes, max_nodes // 4),
-            incumbent=incumbent,
             upper=upper,
             lower=lower,
             waits=waits,
@@ -652,23 +651,19 @@ def prove(
             stop=stop,
             cap_step=cap_step,
             modes=modes,
+        )
+        first = again(
+            None if time_limit is None else time_limit / 4,
+            plain_nodes if max_nodes is None else min(plain_nodes, max_nodes // 4),
+            incumbent=incumbent,
             sequences=False,
         )
         if first.proven or first.reason not in ("time", "nodes"):
             return replace(first, seconds=time.perf_counter() - t0)
-        rest = prove(
-            problem,
+        rest = again(
             None if time_limit is None else max(0.0, time_limit - first.seconds),
             None if max_nodes is None else max(0, max_nodes - first.nodes),
             incumbent=first.schedule if first.schedule is not None else incumbent,
-            upper=upper,
-            lower=lower,
-            waits=waits,
-            progress=progress,
-            progress_every=progress_every,
-            stop=stop,
-            cap_step=cap_step,
-            modes=modes,
             sequences=True,
             diagram_step=diagram_step,
             max_leaves=max_leaves,
