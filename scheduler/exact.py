@@ -60,12 +60,34 @@ keeps the optimum of the true problem (waits at zone borders allowed, as
   plus its tail; per arm, the one-machine bound of its tasks (a later start
   plus all durations and least travel into all but one of them plus the
   least tail); per kept resource, the same over its intervals (their
-  nominal lengths, the rest of the task after them plus its tail); per pair
+  nominal lengths, the rest of the task after them plus its tail; the
+  preemptive bound below); per pair
   of arms and threshold ``h``, the tasks of both starting at ``h`` or later
   progress ``sum X`` and ``sum Y`` and both at once for at most the sum of
   their pairwise overlap caps (:mod:`scheduler.overlap`, an upper bound of
   the time two modes progress together), so the span after ``h`` is at least
   ``sum X + sum Y - sum caps``.
+* **Tails from the network.** A node's edges (precedence with nominal task
+  steps, the arm sequences and the orders fixed so far) hold in every
+  completion, so the makespan is at least ``x[u] + L(u)``, ``L(u)`` the
+  longest path from point ``u`` to any task's end
+  (:func:`scheduler.kernel.exact_bb.stn_tails`; waits only lengthen a
+  path). Every tail above (of a task, an arm's task, an interval: ``L`` of
+  its closing point less its offset) is the larger of the static one and
+  this one, so a task followed on its arm by others carries their work.
+* **Every arm in a resource at once** (Jackson's preemptive bound, Carlier):
+  the intervals of one kept resource never overlap in time, whichever arms
+  they belong to (one arm's are sequential, other arms' are excluded by the
+  resource: an exclusive zone, a shared zone's movement, a tool), each lasts
+  at least its nominal length, starts no earlier than its head (earliest
+  time) and is followed by at least its tail. So for every subset ``J`` of
+  them the makespan is at least ``min head(J) + sum length(J) + min
+  tail(J)``; :func:`scheduler.kernel.exact_bb.jackson_bound` takes the
+  largest over all subsets (for least head ``a`` and least tail ``b``, every
+  interval with head ``>= a`` and tail ``>= b`` may join, so ``n * n``
+  candidates suffice). This is where three or four arms taking turns in one
+  zone or use one tool (``scara4``'s blocks and its screwdriver) show, which the pair bounds
+  below miss.
 * **Coordination-diagram bound** once every arm's sequence is fixed, per
   pair of arms (:func:`scheduler.kernel.exact_bb.diagram_bound`): the two
   sequences laid end to end (tasks and travel) are the axes, every pair of
@@ -75,12 +97,19 @@ keeps the optimum of the true problem (waits at zone borders allowed, as
   path with the overlap caps' König argument; releases and other arms are
   left out (a relaxation), the earliest starts enter as heads. A coarse grid
   is tried first: every cell side gives a bound.
-* **Order.** A first pass fixes modes and sequences and keeps every leaf
-  whose diagram bound is below the incumbent; the second searches the kept
-  leaves by increasing bound, so when it stops early every schedule better
-  than the best found lies in a leaf not yet finished, whose bound is at
-  least the current one: :attr:`Proof.bound` is then a lower bound of the
-  optimum (else the problem's :func:`scheduler.lower_bound` or ``lower``).
+* **Order.** A first pass fixes modes and sequences and keeps, on a heap
+  by bound, every leaf whose node bound is below the incumbent; a leaf's
+  diagram bound (costlier) is taken when the leaf first comes to the top,
+  and the leaf goes back when that raises it above the next one. Each time
+  the heap has doubled (16, 32, ... leaves) the best leaf is searched at
+  once (the network saved and restored around it), for an incumbent that
+  cuts the rest of the pass; a leaf is dropped only when a bound of its own
+  reaches the incumbent, so nothing is lost. The second pass searches the
+  leaves left by increasing bound, so when it stops early every schedule
+  better than the best found lies in a leaf not yet finished, whose bound
+  is at least the current one: :attr:`Proof.bound` is then a lower bound of
+  the optimum (else the problem's :func:`scheduler.lower_bound` or
+  ``lower``).
 * **Pruning** cuts a node whose bound is at least the best makespan less
   1e-9 s: the optimum is proven to 1e-9 s.
 """
