@@ -875,13 +875,14 @@ def prove(
             "order": np.zeros(n, dtype=np.int64),
         }
 
-    def bound2(a: dict[str, Any]) -> float:
+    def bound2(a: dict[str, Any], cut: float = math.inf) -> float:
+        """The node bound; it may stop early once at ``cut`` or above."""
         return float(
             kb.node_bound(
                 dist, a["t_start"], a["t_end"], a["t_arm"], a["t_dur"], a["t_tail"],
                 a["t_setin"], p.n_arms, a["cap"], a["th"], a["i_lo"], a["i_task"], a["i_ps"], a["i_os"],
                 a["i_len"], a["i_tail"], a["h"], a["ln"], a["tl"], a["ex"], head, nxt, dst, wt,
-                a["i_pe"], a["i_oe"], tail_pt, a["tt"], a["order"],
+                a["i_pe"], a["i_oe"], tail_pt, a["tt"], a["order"], cut,
             )
         )  # fmt: skip
 
@@ -907,7 +908,7 @@ def prove(
         if exhausted():
             return
         stats["nodes"] += 1
-        if max(floor, bound2(a)) >= best_mk - _EPS:
+        if floor >= best_mk - _EPS or bound2(a, best_mk - _EPS) >= best_mk - _EPS:
             stats["pruned"] += 1
             return
         out = a["out"]
@@ -1039,7 +1040,7 @@ def prove(
         if exhausted():
             return
         stats["nodes"] += 1
-        here = bound2(a)
+        here = bound2(a, best_mk - _EPS)
         if here >= best_mk - _EPS:
             stats["pruned"] += 1
             return

@@ -387,6 +387,7 @@ def node_bound(
     tail_pt: Any,
     tt: Any,
     scratch: Any,
+    cut: float = np.inf,
 ) -> float:  # pragma: no cover - compiled
     """A lower bound of every completion of the node (see :mod:`scheduler.exact`).
 
@@ -403,18 +404,41 @@ def node_bound(
     (one per point) and ``tt`` (one per task). Each resource group's bound is
     Jackson's preemptive bound (:func:`jackson_bound`) over all its
     intervals, of every arm (``scratch``: ints, one per interval).
+
+    The cheap bounds come first (static tails, the suffix one-machine bound
+    per resource): when they reach ``cut`` (the node is pruned anyway) the
+    network's tails and the preemptive bounds are not computed.
     """
     T = len(t_start)
     best = 0.0
+    for t in range(T):
+        best = max(best, dist[t_end[t]] + t_tail[t])
+        th[t] = dist[t_start[t]]
+    best = max(
+        best, float(arm_bound(th, t_arm, t_dur, t_tail, t_setin, cap, n_arms, h, ln, tl, ex))
+    )
+    G = len(i_lo) - 1
+    for g in range(G):
+        if best >= cut:
+            return best
+        n = 0
+        for i in range(i_lo[g], i_lo[g + 1]):
+            h[n] = dist[i_ps[i]] + i_os[i]
+            ln[n] = i_len[i]
+            tl[n] = i_tail[i] + t_tail[i_task[i]]
+            ex[n] = 0.0
+            n += 1
+        best = max(best, float(_one_machine(h, ln, tl, ex, n)))
+    if best >= cut:
+        return best
     stn_tails(e_head, e_nxt, e_dst, e_wt, t_end, tail_pt)
     for t in range(T):
         tt[t] = max(t_tail[t], tail_pt[t_end[t]])
         best = max(best, dist[t_end[t]] + tt[t])
-    for t in range(T):
-        th[t] = dist[t_start[t]]
     best = max(best, float(arm_bound(th, t_arm, t_dur, tt, t_setin, cap, n_arms, h, ln, tl, ex)))
-    G = len(i_lo) - 1
     for g in range(G):
+        if best >= cut:
+            return best
         n = 0
         for i in range(i_lo[g], i_lo[g + 1]):
             h[n] = dist[i_ps[i]] + i_os[i]
