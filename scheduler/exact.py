@@ -875,14 +875,17 @@ def prove(
             "order": np.zeros(n, dtype=np.int64),
         }
 
-    def bound2(a: dict[str, Any], cut: float = math.inf) -> float:
-        """The node bound; it may stop early once at ``cut`` or above."""
+    def bound2(a: dict[str, Any], cut: float = math.inf, deep: bool = True) -> float:
+        """The node bound; it may stop early once at ``cut`` or above. Without
+        ``deep``, the cheap bounds only (the pairwise orders' nodes: there the
+        network tails and preemptive bounds were measured to cut too little
+        for their cost on ``supersigma``)."""
         return float(
             kb.node_bound(
                 dist, a["t_start"], a["t_end"], a["t_arm"], a["t_dur"], a["t_tail"],
                 a["t_setin"], p.n_arms, a["cap"], a["th"], a["i_lo"], a["i_task"], a["i_ps"], a["i_os"],
                 a["i_len"], a["i_tail"], a["h"], a["ln"], a["tl"], a["ex"], head, nxt, dst, wt,
-                a["i_pe"], a["i_oe"], tail_pt, a["tt"], a["order"], cut,
+                a["i_pe"], a["i_oe"], tail_pt, a["tt"], a["order"], cut, deep,
             )
         )  # fmt: skip
 
@@ -908,7 +911,7 @@ def prove(
         if exhausted():
             return
         stats["nodes"] += 1
-        if floor >= best_mk - _EPS or bound2(a, best_mk - _EPS) >= best_mk - _EPS:
+        if floor >= best_mk - _EPS or bound2(a, best_mk - _EPS, False) >= best_mk - _EPS:
             stats["pruned"] += 1
             return
         out = a["out"]
@@ -1117,7 +1120,6 @@ def prove(
         for t in order:
             mode_of[t] = ms[t]
             ok = place(t, ms[t]) and ok
-        a = phase2_arrays()
         for arm, sq in enumerate(seqs):
             for x, y in itertools.pairwise(sq):
                 ok = add(end_pt(x), int(base[y]), p.setup_time(arm, x, y)) and ok
@@ -1132,9 +1134,15 @@ def prove(
         if not ok:
             stats["pruned"] += 1
             return None
+        a = arrays.get(ms)  # the last assignment's, if the same
+        if a is None:
+            arrays.clear()
+            a = arrays[ms] = phase2_arrays()
         stats["searched"] += 1
         disjunctive(a, floor)
         return floor
+
+    arrays: dict[tuple[int, ...], dict[str, Any]] = {}
 
     probe = [16]
 

@@ -388,6 +388,7 @@ def node_bound(
     tt: Any,
     scratch: Any,
     cut: float = np.inf,
+    deep: bool = True,
 ) -> float:  # pragma: no cover - compiled
     """A lower bound of every completion of the node (see :mod:`scheduler.exact`).
 
@@ -406,8 +407,9 @@ def node_bound(
     intervals, of every arm (``scratch``: ints, one per interval).
 
     The cheap bounds come first (static tails, the suffix one-machine bound
-    per resource): when they reach ``cut`` (the node is pruned anyway) the
-    network's tails and the preemptive bounds are not computed.
+    per resource): when they reach ``cut`` (the node is pruned anyway), or
+    without ``deep``, the network's tails and the preemptive bounds are not
+    computed.
     """
     T = len(t_start)
     best = 0.0
@@ -429,7 +431,7 @@ def node_bound(
             ex[n] = 0.0
             n += 1
         best = max(best, float(_one_machine(h, ln, tl, ex, n)))
-    if best >= cut:
+    if best >= cut or not deep:
         return best
     stn_tails(e_head, e_nxt, e_dst, e_wt, t_end, tail_pt)
     for t in range(T):
