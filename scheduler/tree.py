@@ -544,6 +544,7 @@ def _solve_tree(
                     if nodes is None and work_limit is not None:
                         nodes = 100 * work_limit
                     if cell_proof:
+                        stats.extra["exact"] = "prove, idle oracle dropped"  # also beside a race
                         res, bound = _prove(q, ev, best, lb, deadline - ph, nodes, waits, stop)
                         lb = max(lb, bound)
                     else:
