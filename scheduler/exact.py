@@ -87,7 +87,8 @@ keeps the optimum of the true problem (waits at zone borders allowed, as
   interval with head ``>= a`` and tail ``>= b`` may join, so ``n * n``
   candidates suffice). This is where three or four arms taking turns in one
   zone or use one tool (``scara4``'s blocks and its screwdriver) show, which the pair bounds
-  below miss.
+  below miss. Both are taken at the sequence level (the pairwise-order
+  nodes keep the cheaper bounds: a weaker bound cuts less, never wrongly).
 * **Coordination-diagram bound** once every arm's sequence is fixed, per
   pair of arms (:func:`scheduler.kernel.exact_bb.diagram_bound`): the two
   sequences laid end to end (tasks and travel) are the axes, every pair of
