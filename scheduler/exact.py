@@ -60,37 +60,68 @@ keeps the optimum of the true problem (waits at zone borders allowed, as
   plus its tail; per arm, the one-machine bound of its tasks (a later start
   plus all durations and least travel into all but one of them plus the
   least tail); per kept resource, the same over its intervals (their
-  nominal lengths, the rest of the task after them plus its tail); per pair
+  nominal lengths, the rest of the task after them plus its tail; the
+  preemptive bound below); per pair
   of arms and threshold ``h``, the tasks of both starting at ``h`` or later
   progress ``sum X`` and ``sum Y`` and both at once for at most the sum of
   their pairwise overlap caps (:mod:`scheduler.overlap`, an upper bound of
   the time two modes progress together), so the span after ``h`` is at least
   ``sum X + sum Y - sum caps``.
+* **Tails from the network.** A node's edges (precedence with nominal task
+  steps, the arm sequences and the orders fixed so far) hold in every
+  completion, so the makespan is at least ``x[u] + L(u)``, ``L(u)`` the
+  longest path from point ``u`` to any task's end
+  (:func:`scheduler.kernel.exact_bb.stn_tails`; waits only lengthen a
+  path). Every tail above (of a task, an arm's task, an interval: ``L`` of
+  its closing point less its offset) is the larger of the static one and
+  this one, so a task followed on its arm by others carries their work.
+* **Every arm in a resource at once** (Jackson's preemptive bound, Carlier):
+  the intervals of one kept resource never overlap in time, whichever arms
+  they belong to (one arm's are sequential, other arms' are excluded by the
+  resource: an exclusive zone, a shared zone's movement, a tool), each lasts
+  at least its nominal length, starts no earlier than its head (earliest
+  time) and is followed by at least its tail. So for every subset ``J`` of
+  them the makespan is at least ``min head(J) + sum length(J) + min
+  tail(J)``; :func:`scheduler.kernel.exact_bb.jackson_bound` takes the
+  largest over all subsets (for least head ``a`` and least tail ``b``, every
+  interval with head ``>= a`` and tail ``>= b`` may join, so ``n * n``
+  candidates suffice). This is where three or four arms taking turns in one
+  zone or use one tool (``scara4``'s blocks and its screwdriver) show, which the pair bounds
+  below miss. Both are taken at the sequence level (the pairwise-order
+  nodes keep the cheaper bounds: a weaker bound cuts less, never wrongly).
 * **Coordination-diagram bound** once every arm's sequence is fixed, per
   pair of arms (:func:`scheduler.kernel.exact_bb.diagram_bound`): the two
   sequences laid end to end (tasks and travel) are the axes, every pair of
   their windows in one resource a forbidden rectangle (and each precedence
   between the two arms a forbidden quadrant), and the longest chain of
-  :func:`scheduler.overlap._chain` bounds the diagonal of every monotone
+  :func:`scheduler.kernel.exact_bb.diagram_chain` bounds the diagonal of every monotone
   path with the overlap caps' König argument; releases and other arms are
   left out (a relaxation), the earliest starts enter as heads. A coarse grid
   is tried first: every cell side gives a bound.
-* **Order.** A first pass fixes modes and sequences and keeps every leaf
-  whose diagram bound is below the incumbent; the second searches the kept
-  leaves by increasing bound, so when it stops early every schedule better
-  than the best found lies in a leaf not yet finished, whose bound is at
-  least the current one: :attr:`Proof.bound` is then a lower bound of the
-  optimum (else the problem's :func:`scheduler.lower_bound` or ``lower``).
+* **Order.** A first pass fixes modes and sequences and keeps, on a heap
+  by bound, every leaf whose node bound is below the incumbent; a leaf's
+  diagram bound (costlier) is taken when the leaf first comes to the top,
+  and the leaf goes back when that raises it above the next one. Each time
+  the heap has doubled (16, 32, ... leaves) the best leaf is searched at
+  once (the network saved and restored around it), for an incumbent that
+  cuts the rest of the pass; a leaf is dropped only when a bound of its own
+  reaches the incumbent, so nothing is lost. The second pass searches the
+  leaves left by increasing bound, so when it stops early every schedule
+  better than the best found lies in a leaf not yet finished, whose bound
+  is at least the current one: :attr:`Proof.bound` is then a lower bound of
+  the optimum (else the problem's :func:`scheduler.lower_bound` or
+  ``lower``).
 * **Pruning** cuts a node whose bound is at least the best makespan less
   1e-9 s: the optimum is proven to 1e-9 s.
 """
 
 from __future__ import annotations
 
+import heapq
 import itertools
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any
@@ -727,10 +758,19 @@ def prove(
     wt = np.zeros(max_edges)
     ne = np.zeros(1, dtype=np.int64)
     dist = np.zeros(n_pts)
+    tail_pt = np.zeros(n_pts)
     queue = np.zeros(n_pts + 1, dtype=np.int64)
     queued = np.zeros(n_pts, dtype=np.bool_)
     mode_of = [-1] * T
-    stats = {"nodes": 0, "pruned": 0, "assignments": 0, "diagrams": 0, "searched": 0, "leaves": 0}
+    stats = {
+        "nodes": 0,
+        "pruned": 0,
+        "assignments": 0,
+        "diagrams": 0,
+        "diagram_calls": 0,
+        "kept": 0,
+        "searched": 0,
+    }
     reason = [""]
     last_report = [t0]
     node_limit = math.inf if max_nodes is None else max_nodes
@@ -739,6 +779,20 @@ def prove(
         if ne[0] >= len(src):
             raise RuntimeError("edge store full")  # pragma: no cover - sized above
         return bool(kb.stn_add(head, nxt, src, dst, wt, ne, dist, queue, queued, u, v, w))
+
+    def attempt(edges: Callable[[], bool], then: Callable[[], None]) -> bool:
+        """One branch: add its edges (``edges`` returns False when the branch is
+        infeasible or cut), run ``then`` on the new node if not, then remove
+        the edges and restore the earliest times. False once the search stops."""
+        saved = dist.copy()
+        keep = int(ne[0])
+        if edges():
+            then()
+        else:
+            stats["pruned"] += 1
+        kb.stn_pop(head, nxt, src, ne, keep)
+        dist[:] = saved
+        return not reason[0]
 
     def exhausted() -> bool:
         if reason[0]:
@@ -818,14 +872,21 @@ def prove(
             "tl": np.zeros(n),
             "ex": np.zeros(n),
             "out": np.zeros(6),
+            "tt": np.zeros(T),
+            "order": np.zeros(n, dtype=np.int64),
         }
 
-    def bound2(a: dict[str, Any]) -> float:
+    def bound2(a: dict[str, Any], cut: float = math.inf, deep: bool = True) -> float:
+        """The node bound; it may stop early once at ``cut`` or above. Without
+        ``deep``, the cheap bounds only (the pairwise orders' nodes: there the
+        network tails and preemptive bounds were measured to cut too little
+        for their cost on ``supersigma``)."""
         return float(
             kb.node_bound(
                 dist, a["t_start"], a["t_end"], a["t_arm"], a["t_dur"], a["t_tail"],
                 a["t_setin"], p.n_arms, a["cap"], a["th"], a["i_lo"], a["i_task"], a["i_ps"], a["i_os"],
-                a["i_len"], a["i_tail"], a["h"], a["ln"], a["tl"], a["ex"],
+                a["i_len"], a["i_tail"], a["h"], a["ln"], a["tl"], a["ex"], head, nxt, dst, wt,
+                a["i_pe"], a["i_oe"], tail_pt, a["tt"], a["order"], cut, deep,
             )
         )  # fmt: skip
 
@@ -851,7 +912,7 @@ def prove(
         if exhausted():
             return
         stats["nodes"] += 1
-        if max(floor, bound2(a)) >= best_mk - _EPS:
+        if floor >= best_mk - _EPS or bound2(a, best_mk - _EPS, False) >= best_mk - _EPS:
             stats["pruned"] += 1
             return
         out = a["out"]
@@ -869,15 +930,7 @@ def prove(
         if inc_start[ty] < inc_start[tx]:
             b1, b2 = b2, b1
         for u, v, w in (b1, b2):
-            saved = dist.copy()
-            keep = int(ne[0])
-            if add(u, v, w):
-                disjunctive(a, floor)
-            else:
-                stats["pruned"] += 1
-            kb.stn_pop(head, nxt, src, ne, keep)
-            dist[:] = saved
-            if reason[0]:
+            if not attempt(partial(add, u, v, w), partial(disjunctive, a, floor)):
                 return
 
     order = list(p.topological_order)
@@ -991,7 +1044,8 @@ def prove(
         if exhausted():
             return
         stats["nodes"] += 1
-        if bound2(a) >= best_mk - _EPS:
+        here = bound2(a, best_mk - _EPS)
+        if here >= best_mk - _EPS:
             stats["pruned"] += 1
             return
         if len(seq) == len(arms[k]):
@@ -999,34 +1053,36 @@ def prove(
             if k + 1 < p.n_arms:
                 sequence(a, arms, k + 1, [])
             else:
-                floor = diagram_bound(done_seqs)
                 stats["diagrams"] += 1
-                if floor < 0 or floor >= best_mk - _EPS:
-                    stats["pruned"] += 1
-                elif not math.isfinite(best_mk):  # no schedule yet: search this leaf now
-                    stats["searched"] += 1
-                    disjunctive(a, floor)
-                else:
-                    leaves.append((floor, tuple(mode_of), [list(q) for q in done_seqs]))
+                if not math.isfinite(best_mk):  # no schedule yet: search this leaf now
+                    floor = diagram_bound(done_seqs)
+                    stats["diagram_calls"] += 1
+                    if floor < 0 or floor >= best_mk - _EPS:
+                        stats["pruned"] += 1
+                    else:
+                        stats["searched"] += 1
+                        disjunctive(a, max(floor, here))
+                else:  # kept with the node's bound; its diagram bound when it comes up
+                    seqs = [list(q) for q in done_seqs]
+                    stats["kept"] += 1
+                    heapq.heappush(leaves, (here, stats["kept"], tuple(mode_of), seqs, False))
+                    if len(leaves) >= probe[0]:
+                        probe_best_leaf()
             done_seqs.pop()
             return
         rest = sorted(set(arms[k]) - set(seq), key=lambda t: (inc_start[t], t))
+
+        def after(x: int, y: int) -> bool:  # y follows x on arm k, after the travel
+            return add(int(a["t_end"][x]), int(a["t_start"][y]), p.setup_time(k, x, y))
+
+        def deeper(y: int) -> None:
+            seq.append(y)
+            sequence(a, arms, k, seq)
+            seq.pop()
+
         for y in rest:
-            saved = dist.copy()
-            keep = int(ne[0])
-            ok = True
-            if seq:
-                x = seq[-1]
-                ok = add(int(a["t_end"][x]), int(a["t_start"][y]), p.setup_time(k, x, y))
-            if ok:
-                seq.append(y)
-                sequence(a, arms, k, seq)
-                seq.pop()
-            else:
-                stats["pruned"] += 1
-            kb.stn_pop(head, nxt, src, ne, keep)
-            dist[:] = saved
-            if reason[0]:
+            edges = partial(after, seq[-1], y) if seq else (lambda: True)
+            if not attempt(edges, partial(deeper, y)):
                 return
 
     done_seqs: list[list[int]] = []
@@ -1049,8 +1105,67 @@ def prove(
             ok = add(end_pt(q), first, 0.0) and ok
         return ok
 
-    # (floor, modes, sequences) of every leaf of the first pass not cut by its bound
-    leaves: list[tuple[float, tuple[int, ...], list[list[int]]]] = []
+    # (floor, number, modes, sequences, diagram bound taken) of every leaf of the
+    # first pass not cut by its bound
+    leaves: list[tuple[float, int, tuple[int, ...], list[list[int]], bool]] = []
+
+    def search_leaf() -> float | None:
+        """Take the kept leaf of least floor off the heap and search it; its
+        diagram bound is taken the first time it comes up, and the leaf goes
+        back when that raises it above the next one. Returns the floor of the
+        leaf searched, or None (none searched: infeasible, cut or put back)."""
+        floor, k, ms, seqs, diagram = heapq.heappop(leaves)
+        kb.stn_pop(head, nxt, src, ne, 0)
+        dist[:] = 0.0
+        ok = True
+        for t in order:
+            mode_of[t] = ms[t]
+            ok = place(t, ms[t]) and ok
+        for arm, sq in enumerate(seqs):
+            for x, y in itertools.pairwise(sq):
+                ok = add(end_pt(x), int(base[y]), p.setup_time(arm, x, y)) and ok
+        if ok and not diagram:
+            low = diagram_bound(seqs)
+            stats["diagram_calls"] += 1
+            ok = 0 <= low < best_mk - _EPS
+            if ok and low > floor and leaves and low > leaves[0][0]:
+                heapq.heappush(leaves, (low, k, ms, seqs, True))
+                return None
+            floor = max(floor, low)
+        if not ok:
+            stats["pruned"] += 1
+            return None
+        a = arrays.get(ms)  # the last assignment's, if the same
+        if a is None:
+            arrays.clear()
+            a = arrays[ms] = phase2_arrays()
+        stats["searched"] += 1
+        disjunctive(a, floor)
+        return floor
+
+    arrays: dict[tuple[int, ...], dict[str, Any]] = {}
+
+    probe = [16]
+
+    def probe_best_leaf() -> None:
+        """In the first pass, once the heap holds ``probe`` leaves (doubled each
+        time): search its best leaf now, for a better incumbent that cuts the
+        rest of the pass (the network is saved around it and restored)."""
+        probe[0] *= 2
+        n = int(ne[0])
+        saved = (head.copy(), nxt[:n].copy(), src[:n].copy(), dst[:n].copy(), wt[:n].copy())
+        saved_dist, saved_modes = dist.copy(), list(mode_of)
+        while leaves and not exhausted():
+            if leaves[0][0] >= best_mk - _EPS:
+                leaves.clear()  # every kept leaf is cut by the new incumbent
+                break
+            if search_leaf() is not None:
+                break
+        head[:] = saved[0]
+        nxt[:n], src[:n], dst[:n], wt[:n] = saved[1:]
+        ne[0] = n
+        dist[:] = saved_dist
+        mode_of[:] = saved_modes
 
     def choose(i: int) -> None:
         if exhausted():
@@ -1069,46 +1184,28 @@ def prove(
         t = order[i]
         allowed = p.task_modes[t] if modes is None else (int(modes[t]),)
         cands = sorted(allowed, key=lambda m: (m != inc_mode[t], p.mode_duration[m]))
+
+        def placed(m: int) -> bool:  # task t in mode m, and the node's bound under the best
+            return place(t, m) and bound1(i + 1) < best_mk - _EPS
+
         for m in cands:
             stats["nodes"] += 1
             mode_of[t] = m
-            saved = dist.copy()
-            keep = int(ne[0])
-            ok = place(t, m)
-            if ok and bound1(i + 1) < best_mk - _EPS:
-                choose(i + 1)
-            else:
-                stats["pruned"] += 1
-            kb.stn_pop(head, nxt, src, ne, keep)
-            dist[:] = saved
+            go_on = attempt(partial(placed, m), partial(choose, i + 1))
             mode_of[t] = -1
-            if reason[0]:
+            if not go_on:
                 return
 
     choose(0)
     floor_now = -math.inf  # the floor of the leaf searched when the second pass stopped
     if sequences and not reason[0]:
         # second pass: the leaves by increasing floor; every schedule better than
-        # the best lies in a leaf not yet searched, so its floor bounds the optimum
-        leaves.sort(key=lambda x: x[0])
-        stats["leaves"] = len(leaves)
-        for floor, ms, seqs in leaves:
-            if floor >= best_mk - _EPS or reason[0]:
-                break
-            floor_now = floor
-            kb.stn_pop(head, nxt, src, ne, 0)
-            dist[:] = 0.0
-            ok = True
-            for t in order:
-                mode_of[t] = ms[t]
-                ok = place(t, ms[t]) and ok
-            a = phase2_arrays()
-            for arm, sq in enumerate(seqs):
-                for x, y in itertools.pairwise(sq):
-                    ok = add(end_pt(x), int(base[y]), p.setup_time(arm, x, y)) and ok
-            stats["searched"] += 1
-            if ok:
-                disjunctive(a, floor)
+        # the best lies in a leaf not yet searched, whose floor is at least the
+        # current one
+        while leaves and not exhausted() and leaves[0][0] < best_mk - _EPS:
+            searched = search_leaf()
+            if searched is not None:
+                floor_now = searched
     proven = not reason[0] or reason[0] == "met the lower bound"
     root = max(lower, float(lower_bound_of(p)))
     bound = best_mk if proven else min(best_mk, max(root, floor_now))
@@ -1124,7 +1221,8 @@ def prove(
         (
             ("assignments", int(stats["assignments"])),
             ("sequences", int(stats["diagrams"])),
-            ("kept", len(leaves)),
+            ("kept", int(stats["kept"])),
+            ("diagrams", int(stats["diagram_calls"])),
             ("searched", int(stats["searched"])),
         ),
     )

@@ -70,44 +70,10 @@ from scheduler.cpsat import (
     resource_windows,
     solve_or_interrupt,
 )
-from scheduler.kernel._jit import njit
+from scheduler.kernel.exact_bb import diagram_chain as _chain
 from scheduler.problem import Problem
 
 __all__ = ["PairOverlap", "overlap_bound", "overlap_caps", "overlap_model"]
-
-
-@njit(cache=True)  # type: ignore[untyped-decorator]
-def _chain(blocked: Any, nodiag: Any) -> Any:  # pragma: no cover - compiled
-    """Per cell, the longest chain of diagonal-free cells, rows and columns
-    increasing, along a staircase of unblocked cells from the first cell to
-    it (-1: unreachable).
-
-    State per cell: whether the chain already holds a cell of this row
-    (``r``) and of this column (``c``), as ``2 r + c``; a cell joins the
-    chain only from state 0."""
-    n, m = blocked.shape
-    table = np.full((n, m), -1, np.int64)
-    prev = np.full((m, 4), -1, np.int64)
-    for i in range(n):
-        cur = np.full((m, 4), -1, np.int64)
-        for j in range(m):
-            if blocked[i, j]:
-                continue
-            if i == 0 and j == 0:
-                cur[0, 0] = 0
-            for s in range(4):
-                if i > 0 and prev[j, s] > cur[j, s & 1]:  # from below-left row: new row
-                    cur[j, s & 1] = prev[j, s]
-                if j > 0 and cur[j - 1, s] > cur[j, s & 2]:  # new column
-                    cur[j, s & 2] = cur[j - 1, s]
-                if i > 0 and j > 0 and prev[j - 1, s] > cur[j, 0]:  # through the corner
-                    cur[j, 0] = prev[j - 1, s]
-            if not nodiag[i, j] and cur[j, 0] >= 0 and cur[j, 0] + 1 > cur[j, 3]:
-                cur[j, 3] = cur[j, 0] + 1
-            for s in range(4):
-                table[i, j] = max(table[i, j], cur[j, s])
-        prev = cur
-    return table
 
 
 @dataclass(frozen=True, slots=True)

@@ -462,8 +462,18 @@ def _solve_tree(
         offer(ev.evaluate(start.order, start.modes))
     lb = st.lb
     proven = False
-    can_prove, why = exact.applicable(p, opt.exact_max_tasks)
-    stats.extra["exact"] = "applicable" if can_prove else why
+    # the exact phase proves the problem without an idle blocking oracle (a
+    # compiled cell's, when no parked arm is ever in the way): dropping it
+    # changes no schedule (scheduler.exact.without_idle_oracle). There the
+    # proof is scheduler.exact.prove's, whether CP-SAT races or not
+    q = p
+    if p.blocking is not None and p.n_tasks <= opt.exact_max_tasks:
+        q = exact.without_idle_oracle(p)
+    can_prove, why = exact.applicable(q, opt.exact_max_tasks)
+    cell_proof = can_prove and q is not p
+    stats.extra["exact"] = (
+        ("prove, idle oracle dropped" if cell_proof else "applicable") if can_prove else why
+    )
     race = None
     # a Ctrl-C anywhere from here on (also between the race's start and the
     # search's own handler, or while the race is asked to end) ends CP-SAT too;
@@ -528,14 +538,19 @@ def _solve_tree(
                 if best is not None and best.makespan <= lb + 1e-9:
                     proven = True
                     break
-                if can_prove and (time_limit is None or rounds >= 2):
+                if (can_prove or cell_proof) and (time_limit is None or rounds >= 2):
                     ph = time.perf_counter()
                     nodes = opt.exact_max_nodes
                     if nodes is None and work_limit is not None:
                         nodes = 100 * work_limit
-                    res = exact.branch_and_bound(
-                        p, best.makespan if best else math.inf, deadline, waits, nodes, stop
-                    )
+                    if cell_proof:
+                        stats.extra["exact"] = "prove, idle oracle dropped"  # also beside a race
+                        res, bound = _prove(q, ev, best, lb, deadline - ph, nodes, waits, stop)
+                        lb = max(lb, bound)
+                    else:
+                        res = exact.branch_and_bound(
+                            p, best.makespan if best else math.inf, deadline, waits, nodes, stop
+                        )
                     stats.nodes += res.nodes
                     stats.pruned += res.pruned
                     stats.phases["exact"] = (
@@ -553,7 +568,8 @@ def _solve_tree(
                     if res.complete:
                         proven = True
                         break
-                    can_prove = False  # out of budget for the proof: go on with the heuristics
+                    # out of budget for the proof: go on with the heuristics
+                    can_prove = cell_proof = False
                     continue
                 rounds += 1
                 # a beam pass (widths 1, 2, 4, ...): new starting points
@@ -692,6 +708,38 @@ def _solve_tree(
         stats.interrupted = True
         stats.evaluations = stats.evaluations or ev.evaluations
         return _finish(p, ev, best, lb, t0, seed, stats, proven)
+
+
+def _prove(
+    q: Problem,
+    ev: Evaluator,
+    best: Solution | None,
+    lb: float,
+    seconds: float,
+    nodes: int | None,
+    waits: bool,
+    stop: Any,
+) -> tuple[exact.ExactResult, float]:
+    """The exact phase on a compiled cell: :func:`scheduler.exact.prove` on
+    ``q`` (the problem without its idle oracle), from the best schedule so far
+    and the lower bound ``lb``, within ``seconds`` (None when infinite) or
+    ``nodes``, stopped by ``stop``; as the result of
+    :func:`scheduler.exact.branch_and_bound` (``complete``: proven), and
+    the proof's lower bound of the optimum."""
+    inc = ev.schedule(best) if best is not None and best.state is not None else None
+    upper = best.makespan + 1e-9 if best is not None and inc is None else math.inf
+    res = exact.prove(
+        q,
+        seconds if math.isfinite(seconds) else None,
+        nodes,
+        incumbent=inc,
+        upper=upper,
+        lower=lb,
+        waits=waits,
+        stop=stop,
+    )
+    out = exact.ExactResult(res.schedule, res.makespan, res.proven, res.nodes, res.pruned)
+    return out, res.bound
 
 
 def _solution_of(sched: Schedule, makespan: float) -> Solution:

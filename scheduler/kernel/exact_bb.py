@@ -17,9 +17,18 @@ from typing import Any
 import numpy as np
 
 from scheduler.kernel._jit import njit
-from scheduler.overlap import _chain
 
-__all__ = ["arm_bound", "conflict", "diagram_bound", "node_bound", "stn_add", "stn_pop"]
+__all__ = [
+    "arm_bound",
+    "conflict",
+    "diagram_bound",
+    "diagram_chain",
+    "jackson_bound",
+    "node_bound",
+    "stn_add",
+    "stn_pop",
+    "stn_tails",
+]
 
 _EPS = 1e-9
 
@@ -188,6 +197,72 @@ def conflict(
 
 
 @njit(cache=True)  # type: ignore[untyped-decorator]
+def stn_tails(
+    head: Any, nxt: Any, dst: Any, wt: Any, t_end: Any, tail: Any
+) -> None:  # pragma: no cover - compiled
+    """Longest paths to the end: ``tail[u]`` is the longest path of the network
+    from point ``u`` to any task's end point (0 at an end point; ``-inf`` when
+    no end point is reachable).
+
+    Every completion of the node satisfies every edge, so its makespan is at
+    least ``x[u] + tail[u]``. The network has no positive cycle (the caller
+    only asks on feasible nodes), so the passes (Bellman-Ford, points taken
+    from the last: a task's own chain settles in one pass) end after at most
+    ``len(tail)`` of them.
+    """
+    n = len(tail)
+    for u in range(n):
+        tail[u] = -np.inf
+    for t in range(len(t_end)):
+        tail[t_end[t]] = 0.0
+    for _ in range(n + 1):
+        changed = False
+        for u in range(n - 1, -1, -1):
+            best = tail[u]
+            f = head[u]
+            while f >= 0:
+                tv = tail[dst[f]]
+                if tv > -np.inf and wt[f] + tv > best + _EPS:
+                    best = wt[f] + tv
+                f = nxt[f]
+            if best > tail[u]:
+                tail[u] = best
+                changed = True
+        if not changed:
+            break
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def jackson_bound(
+    head: Any, length: Any, tail: Any, n: int, order: Any
+) -> float:  # pragma: no cover - compiled
+    """The preemptive one-machine bound of the first ``n`` items (Jackson's
+    preemptive schedule, Carlier): ``max over subsets J of min head(J) +
+    sum length(J) + min tail(J)``.
+
+    For a subset ``J`` with least head ``a`` and least tail ``b``, every item
+    with ``head >= a`` and ``tail >= b`` may be added (the sum only grows), so
+    the maximum is taken over the ``n * n`` pairs ``(a, b)`` of a head and a
+    tail of the items. ``order`` is scratch (``n`` ints).
+    """
+    if n == 0:
+        return 0.0
+    idx = np.argsort(-tail[:n])  # by decreasing tail
+    for k in range(n):
+        order[k] = idx[k]
+    best = 0.0
+    for i in range(n):
+        a = head[i]
+        total = 0.0
+        for k in range(n):
+            j = order[k]
+            if head[j] >= a:
+                total += length[j]
+                best = max(best, a + total + tail[j])
+    return best
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
 def _one_machine(
     head: Any, length: Any, tail: Any, extra: Any, n: int
 ) -> float:  # pragma: no cover
@@ -303,6 +378,17 @@ def node_bound(
     ln: Any,
     tl: Any,
     ex: Any,
+    e_head: Any,
+    e_nxt: Any,
+    e_dst: Any,
+    e_wt: Any,
+    i_pe: Any,
+    i_oe: Any,
+    tail_pt: Any,
+    tt: Any,
+    scratch: Any,
+    cut: float = np.inf,
+    deep: bool = True,
 ) -> float:  # pragma: no cover - compiled
     """A lower bound of every completion of the node (see :mod:`scheduler.exact`).
 
@@ -311,18 +397,32 @@ def node_bound(
     travel into each, tails); per resource group, the one-machine bound of
     its intervals (earliest starts, nominal lengths, the rest of the task
     after the interval plus the task's tail).
+
+    Tails are the larger of the static ones (least durations of the
+    successors) and the network's longest paths to the end (:func:`stn_tails`
+    on the edges ``e_head, e_nxt, e_dst, e_wt``: precedence, the arm
+    sequences and orders fixed so far, with nominal steps), into ``tail_pt``
+    (one per point) and ``tt`` (one per task). Each resource group's bound is
+    Jackson's preemptive bound (:func:`jackson_bound`) over all its
+    intervals, of every arm (``scratch``: ints, one per interval).
+
+    The cheap bounds come first (static tails, the suffix one-machine bound
+    per resource): when they reach ``cut`` (the node is pruned anyway), or
+    without ``deep``, the network's tails and the preemptive bounds are not
+    computed.
     """
     T = len(t_start)
     best = 0.0
     for t in range(T):
         best = max(best, dist[t_end[t]] + t_tail[t])
-    for t in range(T):
         th[t] = dist[t_start[t]]
     best = max(
         best, float(arm_bound(th, t_arm, t_dur, t_tail, t_setin, cap, n_arms, h, ln, tl, ex))
     )
     G = len(i_lo) - 1
     for g in range(G):
+        if best >= cut:
+            return best
         n = 0
         for i in range(i_lo[g], i_lo[g + 1]):
             h[n] = dist[i_ps[i]] + i_os[i]
@@ -331,6 +431,23 @@ def node_bound(
             ex[n] = 0.0
             n += 1
         best = max(best, float(_one_machine(h, ln, tl, ex, n)))
+    if best >= cut or not deep:
+        return best
+    stn_tails(e_head, e_nxt, e_dst, e_wt, t_end, tail_pt)
+    for t in range(T):
+        tt[t] = max(t_tail[t], tail_pt[t_end[t]])
+        best = max(best, dist[t_end[t]] + tt[t])
+    best = max(best, float(arm_bound(th, t_arm, t_dur, tt, t_setin, cap, n_arms, h, ln, tl, ex)))
+    for g in range(G):
+        if best >= cut:
+            return best
+        n = 0
+        for i in range(i_lo[g], i_lo[g + 1]):
+            h[n] = dist[i_ps[i]] + i_os[i]
+            ln[n] = i_len[i]
+            tl[n] = max(i_tail[i] + t_tail[i_task[i]], tail_pt[i_pe[i]] - i_oe[i])
+            n += 1
+        best = max(best, float(jackson_bound(h, ln, tl, n, scratch)))
     return best
 
 
@@ -349,9 +466,43 @@ def _mark(
             flags[i, j] = True
 
 
-# not cached: it calls scheduler.overlap._chain, and numba checks a cached
-# function against its own file only (a stale _chain would be kept)
-@njit(cache=False)  # type: ignore[untyped-decorator]
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def diagram_chain(blocked: Any, nodiag: Any) -> Any:  # pragma: no cover - compiled
+    """Per cell, the longest chain of diagonal-free cells, rows and columns
+    increasing, along a staircase of unblocked cells from the first cell to
+    it (-1: unreachable).
+
+    State per cell: whether the chain already holds a cell of this row
+    (``r``) and of this column (``c``), as ``2 r + c``; a cell joins the
+    chain only from state 0. (The overlap caps of :mod:`scheduler.overlap` and
+    :func:`diagram_bound` share it; it lives here so that numba's cache of
+    :func:`diagram_bound`, checked against this file only, is never stale.)"""
+    n, m = blocked.shape
+    table = np.full((n, m), -1, np.int64)
+    prev = np.full((m, 4), -1, np.int64)
+    for i in range(n):
+        cur = np.full((m, 4), -1, np.int64)
+        for j in range(m):
+            if blocked[i, j]:
+                continue
+            if i == 0 and j == 0:
+                cur[0, 0] = 0
+            for s in range(4):
+                if i > 0 and prev[j, s] > cur[j, s & 1]:  # from below-left row: new row
+                    cur[j, s & 1] = prev[j, s]
+                if j > 0 and cur[j - 1, s] > cur[j, s & 2]:  # new column
+                    cur[j, s & 2] = cur[j - 1, s]
+                if i > 0 and j > 0 and prev[j - 1, s] > cur[j, 0]:  # through the corner
+                    cur[j, 0] = prev[j - 1, s]
+            if not nodiag[i, j] and cur[j, 0] >= 0 and cur[j, 0] + 1 > cur[j, 3]:
+                cur[j, 3] = cur[j, 0] + 1
+            for s in range(4):
+                table[i, j] = max(table[i, j], cur[j, s])
+        prev = cur
+    return table
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
 def diagram_bound(
     la: float,
     lb: float,
@@ -385,7 +536,7 @@ def diagram_bound(
     ``v > p_start[k]`` (axes swapped when ``p_dir[k] == 1``). A schedule is a
     monotone path from ``(0, 0)`` to ``(la, lb)`` taking ``la + lb - D`` time
     at least, ``D`` its diagonal, and the longest chain of
-    :func:`scheduler.overlap._chain` times ``step`` bounds ``D``
+    :func:`diagram_chain` times ``step`` bounds ``D``
     (:mod:`scheduler.overlap`'s argument). Heads: A's task starting at
     progress ``a_at[k]`` starts no earlier than ``a_head[k]``; when the path
     crosses ``u = a_at[k]`` at ``v`` in cell row ``j``, the time is at least
@@ -414,13 +565,13 @@ def diagram_bound(
             _mark(blocked, p_start[k], la + 2.0 * step, -2.0 * step, p_end[k], step)
     if blocked[0, 0] or blocked[n - 1, m - 1]:
         return -1.0
-    table = _chain(blocked, nodiag)
+    table = diagram_chain(blocked, nodiag)
     if table[n - 1, m - 1] < 0:
         return -1.0
     best = la + lb - min(float(table[n - 1, m - 1]) * step, la, lb)
     if len(a_at) + len(b_at) == 0 or best >= cut:
         return best
-    back = _chain(
+    back = diagram_chain(
         np.ascontiguousarray(blocked[::-1, ::-1]), np.ascontiguousarray(nodiag[::-1, ::-1])
     )[::-1, ::-1]
     for k in range(len(a_at)):
