@@ -110,10 +110,10 @@ def test_prove_meets_cpsat_with_arms_taking_turns_in_one_zone(seed: int) -> None
     )  # fmt: skip
     cp = solve(p, "cpsat", time_limit=20, seed=0, workers=1)
     assert cp.status.value == "optimal"
-    res = prove(p, time_limit=60)
+    res = prove(p, max_nodes=5_000_000)
     assert res.proven and res.schedule is not None
     assert res.makespan == pytest.approx(cp.objective, abs=1e-6)
     assert validate(p, res.schedule) == pytest.approx(res.makespan, abs=1e-9)
     # the sequence level on its own too (no first search without it)
-    seq = prove(p, time_limit=60, plain_nodes=0)
+    seq = prove(p, max_nodes=5_000_000, plain_nodes=0)
     assert seq.proven and seq.makespan == pytest.approx(cp.objective, abs=1e-6)

@@ -33,7 +33,7 @@ def _idle(seed: int):  # type: ignore[no-untyped-def]
 @pytest.mark.parametrize("seed", range(6))
 def test_work_limited_tree_proves_the_optimum_of_an_idle_oracle_problem(seed: int) -> None:
     p = _idle(seed)
-    opt = prove(p, time_limit=60)
+    opt = prove(p, max_nodes=5_000_000)
     assert opt.proven
     options = TreeOptions(max_evaluations=300)
     a = solve(p, "tree", time_limit=None, seed=seed, options=options)
@@ -58,7 +58,7 @@ def test_a_small_node_budget_keeps_the_tree_plan_and_no_proof() -> None:
     """Stopped by its node budget, the exact phase leaves a valid plan, no
     better than the optimum and not marked proven unless it meets a bound."""
     p = _idle(5)
-    opt = prove(p, time_limit=60)
+    opt = prove(p, max_nodes=5_000_000)
     options = TreeOptions(max_evaluations=300, exact_max_nodes=3)
     res = solve(p, "tree", time_limit=None, seed=0, options=options)
     assert res.schedule is not None
