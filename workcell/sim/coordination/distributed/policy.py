@@ -3,10 +3,14 @@
 :class:`DistributedPolicy` builds one :class:`~.peer.Peer` per arm at the
 arm's station and routes the frames of that station: peer records
 (:mod:`workcell.sim.protocol.peers`) to the peer, the controller's own
-messages to the peer without the medium (they share the station). It holds
-no decision of its own: it publishes what the harness reads (each task's
-state and cause, written by the peer of the task's arm) and hands each
-fault to the peer where it happens.
+messages and reports to the peer without the medium (they share the
+station). It holds no decision and no view of the arms of its own: it
+publishes what the harness reads (each task's state and cause, written by
+the peer of the task's arm; each arm's view and geometric hold, as its own
+peer has them) and hands each fault to the peer where it happens. The
+geometric check (S2.12) is each peer's (:mod:`.sight`): its own view of
+the arms, from frames, and a request/reply round among the arms that may
+meet before every departure.
 
 Faults under this policy:
 
@@ -27,9 +31,10 @@ Faults under this policy:
   answer in, the raiser broadcasts the change and every arm goes on (stops
   and releases matched by id). The peers keep their mutual exclusion over
   every zone of the plan, active or not.
-* ``arm_failure``: the failed arm's station sends its last frame
-  (:class:`~workcell.sim.protocol.peers.ArmOut`) to every peer. Its uses of
-  every resource then hold no one back, and each peer fails its tasks that
+* ``arm_failure``: the failed arm's station sends its last frames: its
+  view (failed) to the arms that may meet it, then
+  :class:`~workcell.sim.protocol.peers.ArmOut` to every peer. Its uses of
+  every resource and its departure answers then hold no one back, and each peer fails its tasks that
   come after an unfinished task of the failed arm (and tells the peers of
   their successors). There is no re-solve under this policy: the plan is
   kept, as with ``SimOptions(resolve=False)`` under the centralized

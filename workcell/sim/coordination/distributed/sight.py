@@ -88,6 +88,7 @@ from workcell.sim.protocol.exchange import (
 )
 from workcell.sim.protocol.messages import Leg, Station
 from workcell.sim.protocol.peers import Clearance, ClearanceReply, PeerView
+from workcell.sim.protocol.states import ANSWER_MACHINE, ROUND_MACHINE, AnswerState, RoundState
 
 if TYPE_CHECKING:
     from scheduler import Problem
@@ -214,6 +215,8 @@ class Sight:
         self.clock = 0
         self.decided = 0
         self.round: _Round | None = None
+        self.state = RoundState.IDLE
+        """The own departure request's state (:data:`~workcell.sim.protocol.states.ROUND_MACHINE`)."""
         self.queued: DepartureRequest | None = None
         """A request the controller made while a round was out (asked next)."""
         self.deferred: list[tuple[int, Clearance]] = []
@@ -262,6 +265,8 @@ class Sight:
                 self._open(report)
 
     def _open(self, req: DepartureRequest) -> None:
+        ROUND_MACHINE.check(self.state, RoundState.ASKING)
+        self.state = RoundState.ASKING
         self.clock += 1
         self.rounds += 1
         live = set(self.near - self.out)
@@ -279,6 +284,8 @@ class Sight:
         rnd = self.round
         assert rnd is not None
         self.round = None
+        ROUND_MACHINE.check(self.state, RoundState.IDLE)
+        self.state = RoundState.IDLE
         self.decided = rnd.ask
         h, a = self.h, self.a
         if self.queued is not None:  # the controller asked again since: not this one
@@ -308,7 +315,7 @@ class Sight:
             self.held_by = found
         h.channel.order(a, Departure(go, rnd.ask))
         for b, c in self.deferred:
-            self._answer(b, c)
+            self._answer(b, c, AnswerState.DEFERRED)
         self.deferred = []
         if self.queued is not None:
             req, self.queued = self.queued, None
@@ -336,9 +343,10 @@ class Sight:
             self.clock = max(self.clock, payload.clock)
             rnd = self.round
             if rnd is not None and (rnd.clock, self.a) < (payload.clock, b):
+                ANSWER_MACHINE.check(AnswerState.RECEIVED, AnswerState.DEFERRED)
                 self.deferred.append((b, payload))
             else:
-                self._answer(b, payload)
+                self._answer(b, payload, AnswerState.RECEIVED)
         elif isinstance(payload, ClearanceReply):
             self._take(b, payload.n, payload.view, payload.decided)
             rnd = self.round
@@ -349,10 +357,12 @@ class Sight:
         elif isinstance(payload, BackOffUntil):
             self._back_off(payload)
 
-    def _answer(self, b: int, c: Clearance) -> None:
-        """Answer ``b``'s request: reserve its motion, say where this arm is."""
+    def _answer(self, b: int, c: Clearance, state: AnswerState) -> None:
+        """Answer ``b``'s request (in ``state``): reserve its motion, say
+        where this arm is."""
         if b in self.out:
             return
+        ANSWER_MACHINE.check(state, AnswerState.RESERVED)
         self.reserved.setdefault(b, {})[c.ask] = replace(c.view, running=True)
         self.n += 1
         self._send(
@@ -380,6 +390,7 @@ class Sight:
             # sent after that request was decided, standing: those motions are over
             left = {k: v for k, v in res.items() if k > decided}
             if len(left) < len(res):
+                ANSWER_MACHINE.check(AnswerState.RESERVED, AnswerState.OVER)
                 self.reserved[b] = left
                 moved = True
         if moved and (self.view[self.a].held or self.away_until is not None):
@@ -390,10 +401,13 @@ class Sight:
         if b in self.out:
             return
         self.out.add(b)
+        if any(x == b for x, _c in self.deferred):
+            ANSWER_MACHINE.check(AnswerState.DEFERRED, AnswerState.OVER)
         self.deferred = [(x, c) for x, c in self.deferred if x != b]
         # it was taken to its home joints (its last view says so) and never
         # moves again: a motion asked for when it failed is void
-        self.reserved.pop(b, None)
+        if self.reserved.pop(b, None):
+            ANSWER_MACHINE.check(AnswerState.RESERVED, AnswerState.OVER)
         rnd = self.round
         if rnd is not None and b in rnd.waiting:
             rnd.waiting.discard(b)
