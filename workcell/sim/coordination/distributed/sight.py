@@ -226,6 +226,9 @@ class Sight:
         self.held_by: list[int] = []
         """While the own arm is held: the arms in its way."""
         self.away_until: BackOffUntil | None = None
+        self.wanted: BackOffUntil | None = None
+        """A back-off asked of this arm that it could not make yet (tried
+        again when something changes, until the mover moves on)."""
         self.backoffs = 0
         self.detours = 0
         self.rounds = 0
@@ -255,7 +258,7 @@ class Sight:
         if isinstance(report, MotionReport):
             self.view[self.a] = report.view
             self._tell()
-            if report.view.held or self.away_until is not None:
+            if report.view.held or self.away_until is not None or self.wanted is not None:
                 self._notify()
         elif isinstance(report, DepartureRequest):
             self.view[self.a] = report.view
@@ -320,7 +323,7 @@ class Sight:
         if self.queued is not None:
             req, self.queued = self.queued, None
             self._open(req)
-        elif not go:
+        elif not go or self.wanted is not None:
             self._notify()
 
     def blockers(self, mover: ArmView) -> list[int]:
@@ -393,7 +396,9 @@ class Sight:
                 ANSWER_MACHINE.check(AnswerState.RESERVED, AnswerState.OVER)
                 self.reserved[b] = left
                 moved = True
-        if moved and (self.view[self.a].held or self.away_until is not None):
+        if moved and (
+            self.view[self.a].held or self.away_until is not None or self.wanted is not None
+        ):
             self._notify()
 
     def arm_out(self, b: int) -> None:
@@ -450,6 +455,13 @@ class Sight:
                 self.away_until = None
                 h.channel.order(a, ComeBack())
                 return
+        want = self.wanted
+        if want is not None:
+            mover = self.view[want.mover]
+            if mover.failed or want.mover in self.out or mover.running or mover.leg is not want.leg:
+                self.wanted = None  # the mover went on (or out): nothing to make way for
+            else:
+                self._back_off(want)
         if not own.held or self.round is not None:
             return
         found = self.blockers(own)
@@ -485,17 +497,18 @@ class Sight:
         its way home is clear in this peer's view."""
         h, a = self.h, self.a
         v = self.view[a]
+        self.wanted = None
         if (
             v.away
-            or v.running
             or v.failed
             or v.leg is None
             or v.pushing
-            or not v.waiting
-            or self.round is not None
             or self.away_until is not None
             or self.backoffs >= h.max_backoffs
         ):
+            return
+        if v.running or not v.waiting or self.round is not None:
+            self.wanted = until  # not now: again when something changes
             return
         arm = h.cc.cell.arms[a]
         home = np.asarray(h.cc.cell.start[a], dtype=float)
@@ -504,7 +517,8 @@ class Sight:
             return
         retreat = Leg("retreat", v.leg.task, -1, traj, [Station(traj.duration, end=True)])
         if self.blockers(ArmView(a, retreat, 0, 0.0, v.t_ref, False, v.q, v.at_station)):
-            return  # the way back home is not free either
+            self.wanted = until  # the way back home is not free now: again when it may be
+            return
         self.away_until = until
         self.backoffs += 1
         self.detours += 1
