@@ -22,7 +22,7 @@ from workcell.campaign import prepare
 from workcell.sim.comms.link import Link
 from workcell.sim.comms.medium import FixedLatencyMedium
 from workcell.sim.coordination.distributed import DistributedPolicy
-from workcell.sim.coordination.distributed.sight import may_meet
+from workcell.sim.coordination.distributed.reach import may_meet
 from workcell.sim.coordination.guard import GeometryGuard
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace

@@ -54,7 +54,8 @@ from workcell.sim.comms.link import Link
 from workcell.sim.comms.medium import BROADCAST, Frame
 from workcell.sim.coordination.distributed.peer import Peer
 from workcell.sim.coordination.distributed.plan import arm_of, resource_orders
-from workcell.sim.coordination.distributed.sight import Sight, may_meet
+from workcell.sim.coordination.distributed.reach import may_meet
+from workcell.sim.coordination.distributed.sight import Sight
 from workcell.sim.coordination.guard import GeometryGuard
 from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
@@ -165,7 +166,7 @@ class DistributedPolicy:
         self.near: list[frozenset[int]] = (
             may_meet(compiled) if self.guard is not None else [frozenset()] * A
         )
-        """Per arm, the arms that may meet it (:func:`~.sight.may_meet`):
+        """Per arm, the arms that may meet it (:func:`~.reach.may_meet`):
         the only peers it tells where it is and asks before it sets off."""
         self.peers: list[Peer] = [
             Peer(self, a, self._local(a), Sight(self, a, self.guard, self.near[a]))
