@@ -121,7 +121,9 @@ def table(m: Any) -> str:
         "bytes: put on the medium. Under D an arm's controller and its peer share the arm's "
         "station, so dispatch, zone requests, grants and releases of one arm never cross the "
         "medium; only the peers' requests and replies for resources shared with other arms, "
-        "task-end notices to the successors' arms and broadcast emergency stops do. Zone wait: "
+        "task-end notices to the successors' arms, broadcast emergency stops, and the S2.12 "
+        "check among the arms that may meet (each arm's view whenever it changes, and a "
+        "departure request and its answers before every motion) do. Zone wait: "
         "seconds the arms stood at zone borders, summed over the arms. Every number is a count "
         "of simulated events (deterministic for the seed), not a timing.",
     ]

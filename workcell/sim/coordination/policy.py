@@ -47,8 +47,11 @@ class CoordinationPolicy(Protocol):
     """What the harness needs of a coordination policy."""
 
     p: Problem
-    book: list[ArmView]
-    """Per arm, its motion as the policy knows it (the arm's last report)."""
+
+    @property
+    def book(self) -> list[ArmView]:
+        """Per arm, its motion as the policy knows it (the arm's last report)."""
+
     status: list[TaskState]
     """Per task, its state."""
     cause: list[str]
@@ -65,9 +68,14 @@ class CoordinationPolicy(Protocol):
     resolves: int
     resolve_latency: list[float]
     resolve_budget: float
-    detours: int
-    geo_held: dict[int, list[int]]
-    """Per arm held by the geometric check, the arms in its way."""
+
+    @property
+    def detours(self) -> int:
+        """Alternative trajectories and back-offs so far."""
+
+    @property
+    def geo_held(self) -> dict[int, list[int]]:
+        """Per arm held by the geometric check, the arms in its way."""
 
     def start(self) -> None:
         """Dispatch the first work (before the event loop runs)."""

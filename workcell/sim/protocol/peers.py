@@ -18,7 +18,16 @@ S2.7 ones whose role they take:
   released, matched by id;
 * :class:`Activation` (``sleep`` / ``position`` / ``active_zone_grant``): a
   zone activation: stop / my arm stands / the change is made, go on;
-* :class:`ArmOut` (``alarm``): an arm failed (the last frame of its station).
+* :class:`ArmOut` (``alarm``): an arm failed (the last frame of its station);
+* :class:`PeerView` (``motion_report``): my arm's motion and standing, told
+  to the peers whose arms may meet mine;
+* :class:`Clearance` (``departure_request``): may my arm set off on this
+  motion? (the Ricart-Agrawala request of the departure check, S2.12);
+* :class:`ClearanceReply` (``motion_report``): the answer, with where my arm
+  is; it reserves the asked motion at the replier until the asker's report
+  that it stands;
+* :class:`~workcell.sim.protocol.exchange.BackOffUntil` (``back_off``):
+  please back off out of my arm's way (S2.6).
 
 They are frozen records, never tuples, so the link's checks on the
 coordinator's tuple payloads never apply to them.
@@ -36,6 +45,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from workcell.sim.protocol.exchange import ArmView, BackOffUntil
+
 __all__ = [
     "ACTIVATION_KINDS",
     "PEER_RECORDS",
@@ -43,7 +54,10 @@ __all__ = [
     "Alarm",
     "ArmOut",
     "Ask",
+    "Clearance",
+    "ClearanceReply",
     "Notice",
+    "PeerView",
     "Reply",
     "Resource",
 ]
@@ -157,13 +171,104 @@ class ArmOut:
     arm: int
 
 
+@dataclass(frozen=True, slots=True)
+class PeerView:
+    """The sender's arm's motion and standing (S2.7's report, peer to peer).
+
+    Attributes
+    ----------
+    view : ArmView
+        As its controller reported it at the sender's station.
+    n : int
+        The sender's count of the frames that carry its view
+        (:class:`PeerView`, :class:`Clearance`, :class:`ClearanceReply`): a
+        receiver keeps the view of the highest count it took, so a frame
+        that a retransmission let overtake is not read as newer.
+    decided : int
+        The number of the sender's last departure request decided
+        (:attr:`Clearance.ask`): with ``view`` standing, every motion asked
+        for up to it is over (the receiver's reservations of them end).
+    """
+
+    view: ArmView
+    n: int
+    decided: int
+
+    def describe(self) -> str:
+        """What the trace says of it."""
+        v = self.view
+        state = "failed" if v.failed else "moving" if v.running else "standing"
+        return f"arm {v.index} {state} (view {self.n}, decided {self.decided})"
+
+
+@dataclass(frozen=True, slots=True)
+class Clearance:
+    """May the sender's arm set off from ``view`` towards its next station?
+
+    Attributes
+    ----------
+    view, n, decided
+        As :class:`PeerView` (the request carries the asker's view).
+    ask : int
+        The asker's request number (its controller's
+        :attr:`~workcell.sim.protocol.exchange.DepartureRequest.ask`).
+    clock : int
+        The asker's Lamport time of the request: of two arms asking at once
+        the lower ``(clock, arm)`` goes first (the other defers its reply).
+    """
+
+    view: ArmView
+    n: int
+    decided: int
+    ask: int
+    clock: int
+
+    def describe(self) -> str:
+        """What the trace says of it."""
+        return f"arm {self.view.index} asks to set off (request {self.ask}, clock {self.clock})"
+
+
+@dataclass(frozen=True, slots=True)
+class ClearanceReply:
+    """The answer to the :class:`Clearance` numbered ``ask``: where the
+    replier's arm is (``view``: standing, or moving up to its next station),
+    and a promise: the replier's arm starts no motion that the asked one
+    would touch until the asker's report that it stands.
+
+    Attributes
+    ----------
+    view, n, decided
+        The replier's, as :class:`PeerView`.
+    ask : int
+        The asker's request it answers.
+    """
+
+    view: ArmView
+    n: int
+    decided: int
+    ask: int
+
+    def describe(self) -> str:
+        """What the trace says of it."""
+        return f"arm {self.view.index} answers request {self.ask}"
+
+
 PEER_RECORDS: dict[type, str] = {
     Ask: "zone_request",
     Reply: "zone_grant",
     Notice: "trajectory_end",
     ArmOut: "alarm",
+    PeerView: "motion_report",
+    Clearance: "departure_request",
+    ClearanceReply: "motion_report",
+    BackOffUntil: "back_off",
 }
-"""The frame kind that carries each record (an :class:`Alarm` travels as
+"""The frame kind that carries each record, so its size
+(:data:`~workcell.sim.comms.medium.MESSAGE_BYTES`: a view, a request or an
+answer 67 bytes as the S2.12 report, whose acknowledgement and
+request-number fields carry the count and the request numbers; the few
+bytes of a request's Lamport clock are not counted; a back-off request 148
+bytes as the back-off order). An :class:`Alarm` travels as
 ``alarm`` when on and ``wake_up`` when off; an :class:`Activation` as
 ``sleep``, ``position`` and ``active_zone_grant`` by phase)."""
 

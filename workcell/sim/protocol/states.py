@@ -5,7 +5,11 @@ Each participant of the coordination protocol is a small state machine:
 * :class:`TaskState` -- a task as the coordinator sees it (S2.7: dispatched
   with its trajectory, started by its arm, ended, or failed with a cause);
 * :class:`ArmState` -- an arm controller (S2.3: idle, moving, standing at a
-  station until its conditions hold, stopped on its way, failed).
+  station until its conditions hold, stopped on its way, failed);
+* :class:`RoundState` -- a distributed peer's own departure request (S2.12:
+  idle, or asking the arms that may meet its arm);
+* :class:`AnswerState` -- another arm's departure request at a distributed
+  peer (deferred, answered and so reserved, over).
 
 A :class:`Machine` holds the legal transitions of one of them; a transition
 not in its table raises :class:`~multiarm.errors.InternalError` (a bug of
@@ -32,11 +36,15 @@ from dataclasses import dataclass, field
 from multiarm.errors import InternalError
 
 __all__ = [
+    "ANSWER_MACHINE",
     "ARM_MACHINE",
     "MACHINES",
+    "ROUND_MACHINE",
     "TASK_MACHINE",
+    "AnswerState",
     "ArmState",
     "Machine",
+    "RoundState",
     "TaskState",
     "markdown",
     "mermaid",
@@ -73,6 +81,31 @@ class ArmState(enum.StrEnum):
     geometric conflict, a search try) or about to set off again."""
     FAILED = "failed"
     """Failed for good (retracted to its home joints)."""
+
+
+class RoundState(enum.StrEnum):
+    """A distributed peer's own departure request (S2.12, Ricart and Agrawala)."""
+
+    IDLE = "idle"
+    """No request of its arm out."""
+    ASKING = "asking"
+    """Its request is out to the arms that may meet its arm; it defers its
+    answers to their requests of a higher ``(clock, arm)``."""
+
+
+class AnswerState(enum.StrEnum):
+    """Another arm's departure request at a distributed peer."""
+
+    RECEIVED = "received"
+    """Just taken from the medium."""
+    DEFERRED = "deferred"
+    """The peer asks itself with a lower ``(clock, arm)``: answered once it
+    has decided its own departure."""
+    RESERVED = "reserved"
+    """Answered: the asked motion counts as under way in the peer's checks."""
+    OVER = "over"
+    """A frame of the asker sent after it decided says its arm stands, or
+    the asker failed."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -162,7 +195,33 @@ ARM_MACHINE = Machine(
 )
 """The arm controller's machine (:class:`ArmState`)."""
 
-MACHINES: tuple[Machine, ...] = (TASK_MACHINE, ARM_MACHINE)
+ROUND_MACHINE = Machine(
+    "departure round",
+    tuple(s.value for s in RoundState),
+    RoundState.IDLE.value,
+    (
+        ("idle", "asking", "its controller asks to set off: a request to each arm that may meet"),
+        ("asking", "idle", "every answer in (or its sender failed): continue or stop"),
+    ),
+)
+"""A distributed peer's own departure request (:class:`RoundState`; a
+request made while one is out waits, and is asked next)."""
+
+ANSWER_MACHINE = Machine(
+    "departure answer",
+    tuple(s.value for s in AnswerState),
+    AnswerState.RECEIVED.value,
+    (
+        ("received", "reserved", "answered at once with where its arm is"),
+        ("received", "deferred", "it asks itself with a lower (clock, arm)"),
+        ("deferred", "reserved", "its own departure decided: answered"),
+        ("deferred", "over", "the asker failed"),
+        ("reserved", "over", "the asker's later frame says it stands, or it failed"),
+    ),
+)
+"""Another arm's departure request at a distributed peer (:class:`AnswerState`)."""
+
+MACHINES: tuple[Machine, ...] = (TASK_MACHINE, ARM_MACHINE, ROUND_MACHINE, ANSWER_MACHINE)
 """Every protocol participant's machine (documented in ``docs/simulation.md``)."""
 
 
@@ -185,6 +244,8 @@ def mermaid(machine: Machine) -> str:
 _TITLES = {
     "task": "A task at the coordinator (`TaskState`)",
     "arm": "An arm controller (`ArmState`)",
+    "departure round": "A distributed peer's own departure request (`RoundState`)",
+    "departure answer": "Another arm's departure request at a distributed peer (`AnswerState`)",
 }
 
 

@@ -2,8 +2,9 @@
 
 :class:`DistributedPolicy` is registered as ``coordination="distributed"``
 (:data:`workcell.sim.coordination.policy.POLICIES`); :class:`Peer` is one
-arm's coordination half (:mod:`.peer`); :mod:`.plan` derives the resource
-orders every peer holds.
+arm's coordination half (:mod:`.peer`), with its own view of the arms and
+its departure check (:class:`~.sight.Sight`, from frames on the medium
+only); :mod:`.plan` derives the resource orders every peer holds.
 """
 
 from workcell.sim.coordination.distributed.peer import Peer

@@ -66,9 +66,9 @@ if TYPE_CHECKING:
     from scheduler import Problem, Schedule
     from workcell.compile import CompiledCell
     from workcell.sim.comms.link import Link
+    from workcell.sim.coordination.distributed.sight import Sight
     from workcell.sim.events.loop import EventLoop
     from workcell.sim.events.trace import Trace
-    from workcell.sim.protocol.exchange import ArmView
     from workcell.sim.protocol.peers import Resource
 
 
@@ -83,7 +83,6 @@ class PeerHost(Protocol):
     kernel: EventLoop
     link: Link
     trace: Trace
-    book: list[ArmView]
     status: list[TaskState]
     cause: list[str]
     cause_kind: list[str]
@@ -117,10 +116,13 @@ class Peer:
         The arm's index (its station is ``a + 1``).
     deliver : callable
         ``deliver(kind, payload)`` hands a message to the arm's controller.
+    sight : Sight
+        The peer's own view of the arms and its departure check (:mod:`.sight`).
     """
 
-    def __init__(self, shared: PeerHost, a: int, deliver: Deliver) -> None:
+    def __init__(self, shared: PeerHost, a: int, deliver: Deliver, sight: Sight) -> None:
         self.s = shared
+        self.sight = sight
         self.a = a
         self.station = a + 1
         self.deliver = deliver
@@ -200,7 +202,7 @@ class Peer:
             self.dispatch_h = s.kernel.schedule(depart, self.dispatch_next, absolute=True)
             return
         first = any(q not in self.over for q in s.start_pieces[self.a])
-        legs = build_legs(s.cc, s.plan, s.book[self.a], t, first)
+        legs = build_legs(s.cc, s.plan, self.sight.view[self.a], t, first)
         s.set_status(t, TaskState.DISPATCHED)
         self.prev = t
         permit = self._startable(t)
@@ -362,6 +364,9 @@ class Peer:
             self._on_activation(b, payload)
         elif isinstance(payload, ArmOut):
             self.arm_out(payload.arm)
+            self.sight.arm_out(payload.arm)
+        else:  # the arms' views, departure requests and answers, back-off requests
+            self.sight.from_peer(b, payload)
 
     # ------------------------------------------------------------ zone activation (S2.5)
     def _send_activation(self, to: int, act: Activation) -> None:
@@ -498,7 +503,10 @@ class Peer:
     def _request(self, piece: Piece) -> None:
         s = self.s
         k = (piece.kind, piece.resource)
-        i = s.position[piece]
+        i = s.position.get(piece)
+        if i is None:  # no zone protocol (SimOptions(zone_protocol=False)): granted at once
+            self.deliver("zone_grant", piece)
+            return
         if piece not in self.waiting:
             self.waiting.append(piece)
         for b in self._missing(k, i):

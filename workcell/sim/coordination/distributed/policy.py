@@ -3,10 +3,14 @@
 :class:`DistributedPolicy` builds one :class:`~.peer.Peer` per arm at the
 arm's station and routes the frames of that station: peer records
 (:mod:`workcell.sim.protocol.peers`) to the peer, the controller's own
-messages to the peer without the medium (they share the station). It holds
-no decision of its own: it publishes what the harness reads (each task's
-state and cause, written by the peer of the task's arm) and hands each
-fault to the peer where it happens.
+messages and reports to the peer without the medium (they share the
+station). It holds no decision and no view of the arms of its own: it
+publishes what the harness reads (each task's state and cause, written by
+the peer of the task's arm; each arm's view and geometric hold, as its own
+peer has them) and hands each fault to the peer where it happens. The
+geometric check (S2.12) is each peer's (:mod:`.sight`): its own view of
+the arms, from frames, and a request/reply round among the arms that may
+meet before every departure.
 
 Faults under this policy:
 
@@ -27,9 +31,10 @@ Faults under this policy:
   answer in, the raiser broadcasts the change and every arm goes on (stops
   and releases matched by id). The peers keep their mutual exclusion over
   every zone of the plan, active or not.
-* ``arm_failure``: the failed arm's station sends its last frame
-  (:class:`~workcell.sim.protocol.peers.ArmOut`) to every peer. Its uses of
-  every resource then hold no one back, and each peer fails its tasks that
+* ``arm_failure``: the failed arm's station sends its last frames: its
+  view (failed) to the arms that may meet it, then
+  :class:`~workcell.sim.protocol.peers.ArmOut` to every peer. Its uses of
+  every resource and its departure answers then hold no one back, and each peer fails its tasks that
   come after an unfinished task of the failed arm (and tells the peers of
   their successors). There is no re-solve under this policy: the plan is
   kept, as with ``SimOptions(resolve=False)`` under the centralized
@@ -47,15 +52,22 @@ from scheduler import Problem, Schedule
 from workcell.compile import CompiledCell
 from workcell.sim.comms.link import Link
 from workcell.sim.comms.medium import BROADCAST, Frame
-from workcell.sim.coordination.distributed import geometry
 from workcell.sim.coordination.distributed.peer import Peer
 from workcell.sim.coordination.distributed.plan import arm_of, resource_orders
-from workcell.sim.coordination.geometric import initial_book
+from workcell.sim.coordination.distributed.reach import may_meet
+from workcell.sim.coordination.distributed.sight import Sight
 from workcell.sim.coordination.guard import GeometryGuard
-from workcell.sim.events.loop import EventLoop, Handle
+from workcell.sim.events.loop import EventLoop
 from workcell.sim.events.trace import Trace
 from workcell.sim.protocol.channel import ControlChannel
-from workcell.sim.protocol.exchange import ArmView, BackOffUntil, Fail
+from workcell.sim.protocol.exchange import (
+    ArmView,
+    Fail,
+    MotionReport,
+    Report,
+    TaskEnded,
+    TaskStarted,
+)
 from workcell.sim.protocol.messages import LateNotice, Piece
 from workcell.sim.protocol.peers import PEER_RECORDS, Activation, Alarm, Resource
 from workcell.sim.protocol.states import TASK_MACHINE, TaskState
@@ -109,14 +121,7 @@ class DistributedPolicy:
         self.link = net
         self.trace = trace
         self.channel = channel
-        self.book: list[ArmView] = initial_book(compiled)
-        """Per arm, the view it last reported (its peer reads its own arm
-        there; the others' are their reports)."""
-        self.away_until: dict[int, BackOffUntil] = {}
-        self.cleared: list[list[tuple[int, ArmView]]] = [[] for _ in compiled.cell.arms]
-        """Per arm, the departures cleared and not yet acknowledged (handed
-        over at the arm's own station: acknowledged at once)."""
-        self.failing: set[int] = set()
+        self.failed_arms: set[int] = set()
         self.seed = seed
         self.resolve_budget = float(resolve_budget)
         self.resolving = False
@@ -129,11 +134,8 @@ class DistributedPolicy:
         self.plans: list[Schedule] = [plan]
         self.plan_of: list[int] = [0] * T
         self.dropped: frozenset[int] = frozenset()
-        self.failed_arms: set[int] = set()
         self.resolves = 0
         self.resolve_latency: list[float] = []
-        self.detours = 0
-        self.geo_held: dict[int, list[int]] = {}
         self.orders: dict[Resource, list[Piece]] = resource_orders(p, plan) if zone_checks else {}
         self.position: dict[Piece, int] = {
             piece: i for order in self.orders.values() for i, piece in enumerate(order)
@@ -152,21 +154,43 @@ class DistributedPolicy:
             if geometry
             else None
         )
-        self._recheck_h: Handle | None = None
-        self.stalled = 0
+        """The geometric check: the cell's geometry, which every station
+        holds (its caches are keyed by trajectory, it keeps nothing of the
+        arms' state; each peer asks it with its own view)."""
         self.max_stalled = 200
-        self._recheck_at = -1.0
-        self._recheck_n = 0
         self.recheck_limit = 8 + 4 * A
-        self.backoffs = 0
         self.max_backoffs = 2 * T + 2
-        self.detour_tried: set[tuple[int, int, int]] = set()
         self.detour_checks = int(detour_checks)
-        self.detours_on = bool(detours)
         """Work limit of one OMPL detour search (validity checks)."""
-        self.peers: list[Peer] = [Peer(self, a, self._local(a)) for a in range(A)]
+        self.detours_on = bool(detours)
+        self.near: list[frozenset[int]] = (
+            may_meet(compiled) if self.guard is not None else [frozenset()] * A
+        )
+        """Per arm, the arms that may meet it (:func:`~.reach.may_meet`):
+        the only peers it tells where it is and asks before it sets off."""
+        self.peers: list[Peer] = [
+            Peer(self, a, self._local(a), Sight(self, a, self.guard, self.near[a]))
+            for a in range(A)
+        ]
         net.receivers[0] = self._from_controller
         channel.attach_coordination(self.on_report, self.controller_message, self._at_station)
+
+    # ------------------------------------------------------------ published records
+    @property
+    def book(self) -> list[ArmView]:
+        """Per arm, its view as its own peer has it (the harness reads it
+        at the end of a run; no peer reads another's)."""
+        return [peer.sight.view[peer.a] for peer in self.peers]
+
+    @property
+    def geo_held(self) -> dict[int, list[int]]:
+        """Per arm held by its peer's geometric check, the arms in its way."""
+        return {peer.a: list(peer.sight.held_by) for peer in self.peers if peer.sight.held_by}
+
+    @property
+    def detours(self) -> int:
+        """Alternative trajectories and back-offs, every peer's."""
+        return sum(peer.sight.detours for peer in self.peers)
 
     # ------------------------------------------------------------ plumbing
     def owner(self, piece: Piece) -> int:
@@ -222,15 +246,28 @@ class DistributedPolicy:
         for peer in self.peers:
             peer.start()
 
+    def on_report(self, a: int, report: Report, taken: int = -1) -> None:
+        """A report of arm ``a``'s controller, taken by its peer at its
+        station (``taken`` is for a coordinator across the medium: unused)."""
+        del taken
+        if isinstance(report, TaskStarted):
+            self.task_started(a, report.task, report.time)
+        elif isinstance(report, TaskEnded):
+            self.task_ended(a, report.task, report.time)
+        elif a not in self.failed_arms or (
+            isinstance(report, MotionReport) and report.view.failed
+        ):  # a failed arm's station sends its last view, then nothing
+            self.peers[a].sight.own_report(report)
+
     def task_started(self, a: int, t: int, now: float) -> None:
         """Notice: arm ``a`` left task ``t``'s start station."""
         self.set_status(t, TaskState.RUNNING)
-        self.stalled = 0
+        self.peers[a].sight.stalled = 0
         self.trace.add(now, "task_start", arm=self.p.arm_names[a], task=self.p.task_names[t])
 
     def task_ended(self, a: int, t: int, now: float) -> None:
         """Notice: arm ``a`` ended task ``t``'s trajectory."""
-        self.stalled = 0
+        self.peers[a].sight.stalled = 0
         self.trace.add(now, "task_end", arm=self.p.arm_names[a], task=self.p.task_names[t])
 
     def arm_failed(self, a: int) -> None:
@@ -241,7 +278,6 @@ class DistributedPolicy:
         self.channel.order(a, Fail())
         self.trace.add(self.kernel.now, "fault", arm=self.p.arm_names[a], detail="arm failure")
         self.peers[a].fail()
-        self.arm_moved()  # it left its place (retracted home): the held arms look again
 
     def _raiser(self) -> int:
         """The lowest working arm (where a cell-wide fault is raised)."""
@@ -298,11 +334,3 @@ class DistributedPolicy:
             self.trace.add(self.kernel.now, "fault", detail=notice.describe())
             for t in notice.tasks:
                 self.peers[arm_of(self.p, self.plan, t)].part_late(t, notice.arrival, notice.part)
-
-    # ------------------------------------------------------------ geometry (S2.12)
-    on_report = geometry.on_report
-    blockers = geometry.blockers
-    check_departure = geometry.check_departure
-    arm_moved = geometry.arm_moved
-    _recheck = geometry.recheck
-    _try_detour = geometry.try_detour
