@@ -12,9 +12,12 @@ its final schedule and, when it proved it optimal, the time of the proof
 CP-SAT, and the tree's mean gap to CP-SAT's proven optima. It runs the
 sweep (resuming; ``--fresh`` to start over) into
 ``benchmarks/results/outside.parquet`` and writes :func:`outside_table` to
-``outside.md`` and ``outside.json``.
+``outside.md`` and ``outside.json``. ``--tune`` runs the tuning sweep
+``benchmarks/sweeps/outside_tune.toml`` instead (the ``routes`` problems,
+the tree with and without the race beside CP-SAT) and writes
+:func:`tune_table` to ``outside_tune.md``.
 
-Run: ``python -m benchmarks.bench_outside [--fresh] [--workers N] [--quick]``.
+Run: ``python -m benchmarks.bench_outside [--fresh] [--workers N] [--quick] [--tune]``.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ import json
 import math
 from typing import Any
 
-from benchmarks.common import output_dir, publish, run_table_sweep, sweep_arguments
+from benchmarks.common import output_dir, publish, run_table_sweep, sweep_arguments, write
 
 NAME = "outside"
 
@@ -127,6 +130,66 @@ def outside_table(df: Any, *, sweep: str = NAME, tree: str = "tree", cpsat: str 
     return "\n".join(lines) + "\n"
 
 
+def tune_table(df: Any, *, limit: int = 40) -> str:
+    """The table of ``benchmarks/results/outside_tune.md`` (``sweeps/outside_tune.toml``).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Results with the labels ``tree_race16``, ``tree_race100`` and ``cpsat``.
+    limit : int
+        The size rule chosen from it (problems up to ``limit`` tasks race).
+
+    Returns
+    -------
+    str
+        Markdown: per problem the three makespans and statuses; per size band
+        how often racing CP-SAT beat a second tree process, and how often
+        each was behind CP-SAT.
+    """
+    labels = ("tree_race16", "tree_race100", "cpsat")
+    t = {x: df[df["label"] == x].set_index("instance") for x in labels}
+    keys = sorted(
+        t["cpsat"].index,
+        key=lambda k: (json.loads(str(t["cpsat"].loc[k]["instance_params"]))["tasks"], k),
+    )
+    tl = float(df["time_limit"].max())
+    lines = [
+        "# Tuning the race rule on the routes family",
+        "",
+        f"{tl:g} s per run on the machine's 2 cores (sweep `benchmarks/sweeps/outside_tune.toml`). "
+        "`tree_race16`: the tree's earlier rule (a second tree process above 16 tasks); "
+        "`tree_race100`: the tree racing CP-SAT (one worker) on every problem of the family; "
+        "`cpsat`: CP-SAT alone on 2 workers. '(optimal)': the run proved its schedule optimal.",
+        "",
+        "| problem | tasks | tree_race16 | tree_race100 | cpsat | race - fork |",
+        "|---|---|---|---|---|---|",
+    ]
+    bands: dict[bool, list[tuple[float, float, float, bool, bool]]] = {True: [], False: []}
+    for k in keys:
+        tasks = int(json.loads(str(t["cpsat"].loc[k]["instance_params"]))["tasks"])
+        mk = [float(t[x].loc[k]["makespan"]) for x in labels]
+        opt = [t[x].loc[k]["status"] == "optimal" for x in labels]
+        cells = [_fmt(m) + (" (optimal)" if o else "") for m, o in zip(mk, opt, strict=True)]
+        lines.append(f"| {k} | {tasks} | " + " | ".join(cells) + f" | {mk[1] - mk[0]:+g} |")
+        bands[tasks <= limit].append((mk[0], mk[1], mk[2], opt[0], opt[1]))
+    lines.append("")
+    for small, rows in ((True, bands[True]), (False, bands[False])):
+        if not rows:
+            continue
+        ahead = sum(b < a - 1e-9 for a, b, _, _, _ in rows)
+        behind = sum(b > a + 1e-9 for a, b, _, _, _ in rows)
+        lines.append(
+            f"- {'up to' if small else 'above'} {limit} tasks ({len(rows)} problems): racing "
+            f"CP-SAT ahead of a second tree process on {ahead}, behind on {behind}; behind "
+            f"CP-SAT alone: tree_race16 {sum(a > c + 1e-9 for a, _, c, _, _ in rows)}, "
+            f"tree_race100 {sum(b > c + 1e-9 for _, b, c, _, _ in rows)}; proven optimal: "
+            f"tree_race16 {sum(o for *_, o, _ in rows)}, tree_race100 {sum(o for *_, o in rows)}"
+        )
+    lines.append(f"- chosen: `TreeOptions.portfolio_max_tasks = {limit}`")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the sweep and write the table.
 
@@ -139,8 +202,32 @@ def main(argv: list[str] | None = None) -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     sweep_arguments(ap)
+    ap.add_argument(
+        "--tune",
+        action="store_true",
+        help="run the tuning sweep outside_tune.toml instead (writes outside_tune.md)",
+    )
     args = ap.parse_args(argv)
     out = output_dir(args.quick)
+    if args.tune:
+        from workcell.experiments.analysis import sweep_note
+
+        df = run_table_sweep("outside_tune", args, out)
+        command = "python -m benchmarks.bench_outside --tune " + (
+            "--quick" if args.quick else "--fresh"
+        )
+        note = sweep_note(df, sweep_file=["benchmarks/sweeps/outside_tune.toml"], command=command)
+        rows = json.loads(
+            df.drop(columns=["dependencies"], errors="ignore").to_json(orient="records")
+        )
+        path = write(
+            "outside_tune",
+            {"command": command, "sweeps": ["outside_tune.toml"], "seeds": [], "rows": rows},
+            tune_table(df).rstrip("\n") + "\n\n" + note,
+            out,
+        )
+        print(path.read_text())
+        return
     df = run_table_sweep(NAME, args, out)
     path = publish(NAME, df, outside_table(df), out, quick=args.quick, flags="--fresh")
     print(path.read_text())

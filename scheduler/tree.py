@@ -123,7 +123,7 @@ class TreeOptions:
     from 20 tasks on."""
     portfolio_max_windows: int = 1000
     """The race also needs at most this many zone windows (not on a pure
-    FJSP): the compiled cells carry 1,578-2,309 windows, and there CP-SAT
+    FJSP): the compiled cells carry 1,578-2,329 windows, and there CP-SAT
     finds no schedule in 10 s, so the second core is better spent on a
     second tree process."""
     fallback: bool = True
