@@ -209,3 +209,17 @@ def test_portfolio_fields_are_validated(bad: object, name: str) -> None:
     with pytest.raises(UsageError, match=name):
         TreeOptions(**{name: bad})
     assert getattr(TreeOptions(**{name: 0}), name) == 0
+
+
+def test_cpsat_reports_the_bounds_it_proves_only_on_an_exact_model() -> None:
+    """solve_cpsat(on_bound=f): the bounds come in increasing and never pass the optimum;
+    with a time unit that rounds the data the model's bound is no bound of the problem,
+    and f is never called."""
+    p = generate_problem("routes", 3, 10, 3, 1, seed=1)
+    seen: list[float] = []
+    r = solve_cpsat(p, 20.0, 0, workers=1, on_bound=seen.append)
+    assert r.status.value == "optimal"
+    assert seen and seen == sorted(seen) and seen[-1] <= r.objective
+    rounded: list[float] = []
+    solve_cpsat(p, 2.0, 0, workers=1, on_bound=rounded.append, unit=0.3)
+    assert rounded == []
