@@ -561,6 +561,7 @@ def solve_cpsat(
     on_solver: Any = None,
     callback: bool = True,
     unit: float | None = None,
+    on_bound: Callable[[float], None] | None = None,
 ) -> Result:
     """Solve with CP-SAT (see the module docstring).
 
@@ -571,7 +572,10 @@ def solve_cpsat(
     ``False`` hints nothing. ``unit``: the model's time unit in seconds
     (None: exact, see :func:`build_model`); a unit that does not divide the
     data rounds outwards, so the schedules stay valid but the model's bound
-    is not kept."""
+    is not kept. ``on_bound``: called (in CP-SAT's thread) with every
+    improved lower bound CP-SAT proves, in seconds, while it searches; only
+    when that bound is one of the problem (an exact unit, no oracle padding,
+    a valid schedule under the horizon), else never."""
     from ortools.sat.python import cp_model
 
     st = begin(problem, "cpsat", seed, waits=waits)
@@ -623,6 +627,9 @@ def solve_cpsat(
         def on_solution_callback(self) -> None:
             stats.record(time.perf_counter() - t0, self.objective_value / scale)
 
+    if on_bound is not None and exact and anchored:
+        # the objective is an integer: a bound a hair below one (float noise) is that integer
+        solver.best_bound_callback = lambda b: on_bound(math.floor(b + 1e-6) / scale)
     if on_solver is not None:  # e.g. to keep it for stop_search() from another thread
         on_solver(solver)
     # the per-solution callback takes the GIL: a run racing Python code in

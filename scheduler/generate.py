@@ -28,6 +28,7 @@ import numpy as np
 
 from multiarm.errors import ValidationError
 from multiarm.types import Seed, as_rng
+from scheduler.families import random_routes_problem, random_stations_problem
 from scheduler.problem import Model, Problem, Window
 from scheduler.setup import MatrixSetup, TravelSetup
 
@@ -526,10 +527,13 @@ GENERATORS: dict[str, Callable[..., Problem]] = {
     "zones": random_problem,
     "line": random_line_problem,
     "setup_fjsp": _setup_fjsp,
+    "routes": random_routes_problem,
+    "stations": random_stations_problem,
 }
 """The generators of :func:`generate_problem` by name: ``zones``
 (:func:`random_problem`), ``line`` (:func:`random_line_problem`), ``setup_fjsp`` (:func:`random_setup_fjsp`, size
-``[machines, operations, 0, 0]``)."""
+``[machines, operations, 0, 0]``), ``routes`` and ``stations``
+(:mod:`scheduler.families`)."""
 
 
 def generate_problem(

@@ -97,16 +97,35 @@ class TreeOptions:
     says so in ``stats.extra["workers"]``); work-limited runs
     stay in one process, so they remain exactly repeatable."""
     parallel_min_time: float = 1.0
-    portfolio_max_tasks: int = 16
+    portfolio_max_tasks: int = 40
     """Race CP-SAT (one worker, in a thread) against the tree search on
     problems with at most this many tasks, when the run has a wall-clock
-    limit and no work limit: the better schedule wins, and CP-SAT's proof of
-    optimality ends the tree search at once (0: never)."""
+    limit and no work limit: the better schedule wins, CP-SAT's proof of
+    optimality ends the tree search at once, and so does a bound CP-SAT
+    proves that the tree's schedule meets (0: never). Tuned on the
+    ``routes`` family (:mod:`scheduler.families`,
+    ``benchmarks/sweeps/outside_tune.toml``): up to 40 tasks the race ended
+    ahead of a second tree process on 5 of 12 problems and behind on 3 (by
+    1-2 time units), and proved the 2 optima CP-SAT proves within a second
+    (the second tree process proved none); from 50 tasks on it was behind
+    on 6 of 12 and ahead on 2. The two rules below narrow it."""
     portfolio_fjsp_max_tasks: int = 40
     """The same size rule on a pure FJSP (no zones or tools; setups only where
     the graph search reads them, :func:`scheduler.tabu.graph_setup`), where the
     graph tabu search runs beside CP-SAT: there CP-SAT proves the optimum of
     the Fattahi instances up to 36 tasks within about a second."""
+    portfolio_setup_max_tasks: int = 16
+    """The size rule instead of ``portfolio_max_tasks`` on a problem with
+    setup times (not a pure FJSP): CP-SAT's circuits over each arm's tasks
+    take seconds to build from 40 tasks on, and on the zone problems of
+    :func:`scheduler.generate.random_problem` (travel setups,
+    ``benchmarks/results/generated.md``) CP-SAT at 10 s is behind the tree
+    from 20 tasks on."""
+    portfolio_max_windows: int = 1000
+    """The race also needs at most this many zone windows (not on a pure
+    FJSP): the compiled cells carry 1,578-2,329 windows, and there CP-SAT
+    finds no schedule in 10 s, so the second core is better spent on a
+    second tree process."""
     fallback: bool = True
     """When no list order decodes, ask CP-SAT (one worker) within the budget
     left (:mod:`scheduler.fallback`)."""
@@ -119,6 +138,8 @@ class TreeOptions:
             "workers": 1,
             "portfolio_max_tasks": 0,
             "portfolio_fjsp_max_tasks": 0,
+            "portfolio_setup_max_tasks": 0,
+            "portfolio_max_windows": 0,
         }
         for name, least in ints.items():
             v = getattr(self, name)
@@ -316,7 +337,13 @@ def _portfolio_member(  # type: ignore[no-untyped-def]
 
 
 class _Race:
-    """CP-SAT on one worker in a thread (it releases the GIL while searching)."""
+    """CP-SAT on one worker in a thread (it releases the GIL while searching).
+
+    Both sides learn what the other proves or finds: CP-SAT reports every
+    lower bound it proves (:func:`scheduler.cpsat.solve_cpsat`'s
+    ``on_bound``), the tree every better makespan (:meth:`offer`); once the
+    bound meets the tree's makespan, that makespan is optimal and both stop.
+    """
 
     def __init__(
         self, problem: Problem, waits: bool, seed: int, seconds: float, done: _ctrl_c.StopEvent
@@ -324,7 +351,13 @@ class _Race:
         import threading
 
         self.done = done
-        """Set when CP-SAT proved the optimum (or infeasibility): the tree stops."""
+        """Set when CP-SAT proved the optimum (or infeasibility), or a bound
+        that the tree's makespan meets: the tree stops."""
+        self.bound = 0.0
+        """The best lower bound CP-SAT proved so far (seconds; 0: none)."""
+        self._incumbent = math.inf
+        self.meets_bound = False
+        """True once the tree's makespan met CP-SAT's bound (it is optimal)."""
         self._solver: Any = None
         self._stopped = False
         self._ready = threading.Event()
@@ -370,6 +403,7 @@ class _Race:
                 workers=1,
                 on_solver=self._keep,
                 callback=False,
+                on_bound=self._bound,
             )
             self._result = r
             if r.status in (SolveStatus.OPTIMAL, SolveStatus.INFEASIBLE):
@@ -380,6 +414,24 @@ class _Race:
         finally:
             self._ready.set()
             self._finished.set()
+
+    def _bound(self, bound: float) -> None:
+        """CP-SAT proved ``bound`` (in its thread)."""
+        if bound > self.bound:
+            self.bound = bound
+        self._check()
+
+    def offer(self, makespan: float) -> None:
+        """The tree found a schedule of ``makespan`` (in the tree's thread)."""
+        if makespan < self._incumbent:
+            self._incumbent = makespan
+        self._check()
+
+    def _check(self) -> None:
+        if not self.meets_bound and self._incumbent <= self.bound + 1e-9:
+            self.meets_bound = True  # the tree's schedule is optimal: nothing more to find
+            self.done.set()
+            self.stop()
 
     def _keep(self, solver: Any) -> None:
         self._solver = solver
@@ -446,6 +498,7 @@ def _solve_tree(
     p = problem
     ev = st.ev
     best: Solution | None = st.first  # the HEFT list, recorded as the first incumbent
+    race: _Race | None = None
 
     def offer(sol: Solution | None) -> None:
         nonlocal best
@@ -454,13 +507,15 @@ def _solve_tree(
             best = sol
             if improved:
                 stats.record(time.perf_counter() - t0, sol.makespan)
+                if race is not None:
+                    race.offer(sol.makespan)  # optimal at once if CP-SAT's bound meets it
 
     if p.n_tasks == 0:
         return _finish(p, ev, None, 0.0, t0, seed, stats, proven=True)
     # the HEFT list came first (begin); then the warm start, if given
     if start is not None:
         offer(ev.evaluate(start.order, start.modes))
-    lb = st.lb
+    lb = _integral_bound(p, st.lb)
     proven = False
     # the exact phase proves the problem without an idle blocking oracle (a
     # compiled cell's, when no parked arm is ever in the way): dropping it
@@ -486,11 +541,12 @@ def _solve_tree(
         if (
             time_limit is not None
             and opt.max_evaluations is None
-            and p.n_tasks
-            <= (opt.portfolio_fjsp_max_tasks if pure_fjsp(ev) else opt.portfolio_max_tasks)
+            and _races(p, opt, pure_fjsp(ev))
             and (best is None or best.makespan > lb + 1e-9)
         ):
             race = _Race(p, waits, seed, deadline - time.perf_counter(), stop)
+            if best is not None:
+                race.offer(best.makespan)
             can_prove = False  # CP-SAT is the proof here (measured faster than the exact B&B)
             stats.extra["exact"] = "left to the racing CP-SAT"
         remaining = deadline - time.perf_counter()
@@ -674,6 +730,12 @@ def _solve_tree(
                     proven = best.makespan <= cp.objective + 1e-9
                 elif cp.status is SolveStatus.INFEASIBLE:
                     proven = True
+            # a bound CP-SAT proved while it searched (valid also when it was
+            # stopped before it could say so in its result)
+            lb = max(lb, race.bound)
+            stats.extra["portfolio_bound"] = race.bound
+            if best is not None and best.makespan <= lb + 1e-9:
+                proven = True
         if best is None and not proven and opt.fallback and not (stats.interrupted or ctrl_c.hit):
             # no list order decodes (start zones dead-locking): ask CP-SAT within the budget left
             from scheduler.fallback import exact_fallback
@@ -740,6 +802,37 @@ def _prove(
     )
     out = exact.ExactResult(res.schedule, res.makespan, res.proven, res.nodes, res.pruned)
     return out, res.bound
+
+
+def _integral_bound(p: Problem, lb: float) -> float:
+    """``lb`` rounded up to the problem's time grid, when it has one.
+
+    When every time of the problem is a multiple of ``1 / s``
+    (:func:`scheduler.cpsat.integer_scale`) and no blocking oracle charges
+    detours, some optimal schedule has all its times on that grid: once the
+    modes and the order on every arm, zone and tool are fixed, the
+    constraints are differences of times with constants on the grid, and
+    the earliest times that meet them (longest paths) are no later than any
+    others and lie on the grid. So the optimum is a multiple of ``1 / s``
+    and the ceiling of a bound is a bound.
+    """
+    if p.blocking is not None or not math.isfinite(lb) or lb <= 0.0 or p.n_tasks > 5000:
+        return lb
+    from scheduler.cpsat import integer_scale
+
+    scale, on_grid = integer_scale(p)
+    if not on_grid:
+        return lb
+    return max(lb, math.ceil(lb * scale - 1e-6) / scale)
+
+
+def _races(p: Problem, opt: TreeOptions, fjsp: bool) -> bool:
+    """Whether the tree search races CP-SAT on ``p`` (the size rule of
+    :class:`TreeOptions`; wall-clock runs without a work limit only)."""
+    if fjsp:
+        return p.n_tasks <= opt.portfolio_fjsp_max_tasks
+    most = opt.portfolio_max_tasks if p._setup.zero else opt.portfolio_setup_max_tasks
+    return p.n_tasks <= most and p.n_windows <= opt.portfolio_max_windows
 
 
 def _solution_of(sched: Schedule, makespan: float) -> Solution:

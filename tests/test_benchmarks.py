@@ -22,6 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_generated",
         "bench_setups",
         "bench_lines",
+        "bench_outside",
         "bench_scale",
         "bench_resolve",
         "bench_geometry",
