@@ -94,12 +94,21 @@ class Rescheduled:
         Why there is no schedule ("" when there is one).
     latency : float
         Wall-clock seconds of the call (a measurement, never used to decide).
+    phases : tuple of (str, float)
+        Wall-clock seconds of the call's parts (a measurement): ``"state"``
+        (what the coordinator knows turned into the decoder's start),
+        ``"first"`` (the warm start decoded), ``"search"`` (the local
+        search), ``"decodes"`` (the decoding within ``"first"`` and
+        ``"search"``), ``"build"`` (the schedule record) and ``"validate"``
+        (zero unless ``check``); ``"prepare"`` is the part before the
+        scheduler's online search (the dropped tasks and the warm start).
     """
 
     schedule: Schedule | None
     dropped: frozenset[int] = field(default_factory=frozenset)
     reason: str = ""
     latency: float = 0.0
+    phases: tuple[tuple[str, float], ...] = ()
 
     @property
     def makespan(self) -> float:
@@ -146,6 +155,7 @@ def reschedule(
     evaluations: int = 200,
     time_limit: float = 1e6,
     seed: int = 0,
+    check: bool = False,
 ) -> Rescheduled:
     """A new plan from what the coordinator knows (module docstring).
 
@@ -174,6 +184,11 @@ def reschedule(
     time_limit : float
         Seconds of wall clock (large by default: the work limit decides).
     seed : int
+    check : bool
+        Check the new plan with :func:`scheduler.validate` before returning
+        it (off by default: the decoder places every task feasibly by
+        construction, and on a large compiled cell the check costs more than
+        the rest of the call; the tests check the plans).
 
     Returns
     -------
@@ -184,6 +199,7 @@ def reschedule(
     UsageError
         A task index or arm index out of range.
     """
+    t_in = time.perf_counter()
     p = problem
     done = dict(done or {})
     running = dict(running or {})
@@ -232,9 +248,20 @@ def reschedule(
     t0 = time.perf_counter()
     new: Schedule | None = None
     err = ""
+    phases: dict[str, float] = {"prepare": t0 - t_in}
     for limit in (evaluations, 1):
         try:
-            res = _online(p, state, warm, time_limit=time_limit, seed=seed, max_evaluations=limit)
+            res = _online(
+                p,
+                state,
+                warm,
+                time_limit=time_limit,
+                seed=seed,
+                max_evaluations=limit,
+                check=check,
+            )
+            for part, v in res.stats.phases.items():
+                phases[part] = phases.get(part, 0.0) + v
             new = res.schedule
             err = "" if new is not None else f"no schedule ({res.status.value})"
         except (ScheduleError, UsageError) as exc:
@@ -247,4 +274,6 @@ def reschedule(
             new, err = None, "a task that can run was planned after the dropped ones"
             continue
         break
-    return Rescheduled(new, frozenset(dead), err, time.perf_counter() - t0)
+    return Rescheduled(
+        new, frozenset(dead), err, time.perf_counter() - t_in, tuple(sorted(phases.items()))
+    )
