@@ -33,6 +33,7 @@ Examples
 
 from __future__ import annotations
 
+import gc
 import math
 import time
 from collections.abc import Collection, Mapping
@@ -159,6 +160,10 @@ def reschedule(
 ) -> Rescheduled:
     """A new plan from what the coordinator knows (module docstring).
 
+    The call is latency-critical: Python's cyclic garbage collector is held
+    off while it runs (a full collection of a long simulation's garbage can
+    take a second) and runs again afterwards as before.
+
     Parameters
     ----------
     problem : Problem
@@ -199,6 +204,44 @@ def reschedule(
     UsageError
         A task index or arm index out of range.
     """
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return _reschedule(
+            problem,
+            now=now,
+            previous=previous,
+            done=done,
+            running=running,
+            failed=failed,
+            arms_out=arms_out,
+            parts_late=parts_late,
+            evaluations=evaluations,
+            time_limit=time_limit,
+            seed=seed,
+            check=check,
+        )
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _reschedule(
+    problem: Problem,
+    *,
+    now: float,
+    previous: Schedule,
+    done: Mapping[int, FrozenTask] | None = None,
+    running: Mapping[int, FrozenTask] | None = None,
+    failed: Collection[int] = (),
+    arms_out: Collection[int] = (),
+    parts_late: Mapping[int, float] | None = None,
+    evaluations: int = 200,
+    time_limit: float = 1e6,
+    seed: int = 0,
+    check: bool = False,
+) -> Rescheduled:
+    """:func:`reschedule` with the collector held off."""
     t_in = time.perf_counter()
     p = problem
     done = dict(done or {})

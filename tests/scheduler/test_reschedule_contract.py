@@ -192,3 +192,34 @@ def test_the_list_decoder_places_every_task_as_the_plain_loop_does(
     want = _reference_decode(p, order, chrono, waits)
     for x, y in zip(got, want, strict=True):
         assert np.array_equal(x, y, equal_nan=True)
+
+
+def test_the_collector_is_held_off_during_the_call_and_restored_after() -> None:
+    """The call is latency-critical: no cyclic collection runs inside it
+    (counted by a collector callback), and the collector's state is what it
+    was before the call, on or off."""
+    import gc
+
+    s = _situation(3, False)
+    p, kw = s["p"], s["kw"]
+    runs: list[int] = []
+
+    def count(phase: str, info: dict[str, int]) -> None:
+        if phase == "start":
+            runs.append(info["generation"])
+
+    gc.callbacks.append(count)
+    try:
+        for was in (True, False):
+            (gc.enable if was else gc.disable)()
+            thresholds = gc.get_threshold()
+            gc.set_threshold(1, 1, 1)  # a collection on nearly every allocation
+            runs.clear()
+            r = reschedule(p, seed=0, evaluations=5, **kw)
+            gc.set_threshold(*thresholds)
+            assert r.schedule is not None
+            assert runs == []
+            assert gc.isenabled() == was
+    finally:
+        gc.callbacks.remove(count)
+        gc.enable()
