@@ -271,7 +271,7 @@ class Evaluator:
             self._anchor_order = self._anchor_modes = self._anchor_sol = None
             return False
         lo = self._last_k + 1
-        copy_rows(self.inst, self._scratch, self._snaps, lo, len(self._snaps.ok))
+        copy_rows(self._scratch, self._snaps, lo, len(self._snaps.ok))
         self._anchor_order, self._anchor_modes, self._anchor_sol = sol.order, sol.modes, sol
         return True
 

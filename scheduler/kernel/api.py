@@ -451,7 +451,7 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         snaps = new_snaps(inst, len(order), every)
         _code, st3 = decode_resume(inst, order, free, snaps, snaps, -1, every=every)
         decode_resume(inst, order, free, snaps, snaps, 0, every=every)
-        copy_rows(inst, snaps, new_snaps(inst, len(order), every), 0, 1)
+        copy_rows(snaps, new_snaps(inst, len(order), every), 0, 1)
         critical_chain(inst, st3)
         cheapest_slot(inst, 0, 0, np.zeros(0, dtype=np.int64), 0, 0)  # the tabu search's
     _WARM = True

@@ -108,16 +108,11 @@ def new_snaps(inst: Instance, n: int, every: int) -> Snaps:
 
 
 @njit(cache=True)
-def _save(st, sn, k, res_lo):
-    """Row ``k`` of ``sn`` := ``st``; of the timelines only the intervals
-    each resource holds (the entries past a resource's count are never read)."""
-    for r in range(res_lo.shape[0]):
-        lo = res_lo[r]
-        for i in range(lo, lo + st.res_n[r]):
-            sn.tl_s[k, i] = st.tl_s[i]
-            sn.tl_e[k, i] = st.tl_e[i]
-            sn.tl_own[k, i] = st.tl_own[i]
-            sn.tl_task[k, i] = st.tl_task[i]
+def _save(st, sn, k):
+    sn.tl_s[k] = st.tl_s
+    sn.tl_e[k] = st.tl_e
+    sn.tl_own[k] = st.tl_own
+    sn.tl_task[k] = st.tl_task
     sn.res_n[k] = st.res_n
     sn.arm_t[k] = st.arm_t
     sn.arm_n[k] = st.arm_n
@@ -130,15 +125,11 @@ def _save(st, sn, k, res_lo):
 
 
 @njit(cache=True)
-def _load(sn, k, st, res_lo):
-    """``st`` := row ``k`` of ``sn`` (the timelines' held intervals, as :func:`_save`)."""
-    for r in range(res_lo.shape[0]):
-        lo = res_lo[r]
-        for i in range(lo, lo + sn.res_n[k, r]):
-            st.tl_s[i] = sn.tl_s[k, i]
-            st.tl_e[i] = sn.tl_e[k, i]
-            st.tl_own[i] = sn.tl_own[k, i]
-            st.tl_task[i] = sn.tl_task[k, i]
+def _load(sn, k, st):
+    st.tl_s[:] = sn.tl_s[k]
+    st.tl_e[:] = sn.tl_e[k]
+    st.tl_own[:] = sn.tl_own[k]
+    st.tl_task[:] = sn.tl_task[k]
     st.res_n[:] = sn.res_n[k]
     st.arm_t[:] = sn.arm_t[k]
     st.arm_n[:] = sn.arm_n[k]
@@ -150,17 +141,13 @@ def _load(sn, k, st, res_lo):
 
 
 @njit(cache=True)
-def _copy_rows(src, dst, lo, hi, res_lo):
-    """Rows ``lo:hi`` of every field of ``src`` into ``dst`` (of the
-    timelines only the intervals each resource holds, as :func:`_save`)."""
+def _copy_rows(src, dst, lo, hi):
+    """Rows ``lo:hi`` of every field of ``src`` into ``dst``."""
     for k in range(lo, hi):
-        for r in range(res_lo.shape[0]):
-            a = res_lo[r]
-            for i in range(a, a + src.res_n[k, r]):
-                dst.tl_s[k, i] = src.tl_s[k, i]
-                dst.tl_e[k, i] = src.tl_e[k, i]
-                dst.tl_own[k, i] = src.tl_own[k, i]
-                dst.tl_task[k, i] = src.tl_task[k, i]
+        dst.tl_s[k] = src.tl_s[k]
+        dst.tl_e[k] = src.tl_e[k]
+        dst.tl_own[k] = src.tl_own[k]
+        dst.tl_task[k] = src.tl_task[k]
         dst.res_n[k] = src.res_n[k]
         dst.arm_t[k] = src.arm_t[k]
         dst.arm_n[k] = src.arm_n[k]
@@ -184,10 +171,10 @@ def _decode_chunks(d, st, cx, sc, ot, order, fixed, every, src, k_from, out, buf
     if outer[4] == 0:
         outer[4] = 1
         if k_from >= 0:
-            _load(src, k_from, st, d.res_lo)
+            _load(src, k_from, st)
             outer[0] = k_from * every
         else:
-            _save(st, out, 0, d.res_lo)
+            _save(st, out, 0)
             outer[0] = 0
     while True:
         if outer[1] == 0:
@@ -217,25 +204,20 @@ def _decode_chunks(d, st, cx, sc, ot, order, fixed, every, src, k_from, out, buf
         if pos % every == 0:
             k = pos // every
             if outer[2] == 0:
-                _save(st, out, k, d.res_lo)
+                _save(st, out, k)
             else:
                 out.ok[k] = False
 
 
-def copy_rows(inst: Instance, src: Snaps, dst: Snaps, lo: int, hi: int) -> None:
+def copy_rows(src: Snaps, dst: Snaps, lo: int, hi: int) -> None:
     """Copy rows ``lo:hi`` (snapshots and their flags) from ``src`` to ``dst``.
-
-    Of each timeline only the intervals its resource holds are copied (the
-    entries past a resource's count are never read).
 
     Parameters
     ----------
-    inst : Instance
-        The compiled problem the snapshots are of.
     src, dst : Snaps
     lo, hi : int
     """
-    _copy_rows(src, dst, int(lo), int(hi), inst.data.res_lo)
+    _copy_rows(src, dst, int(lo), int(hi))
 
 
 def decode_resume(
