@@ -25,7 +25,6 @@ from scheduler.kernel.place import (
     PLACED,
     _commit,
     _earliest,
-    _end_bound,
     _place_blocking,
     _query,
 )
@@ -88,10 +87,6 @@ def _decode(d, st, cx, sc, ot, pending, fixed, cursor):
                     if (fixed[t] >= 0 and m != fixed[t]) or not allowed[m]:
                         continue
                     nb = bd_ptr[m + 1] - bd_ptr[m]
-                    # a mode that cannot end before the best so far cannot win
-                    # (not even a tie): skip its timelines (the same decode)
-                    if best < INF and _end_bound(d, st, t, m, S0, chrono, arm_lb) > best + 2 * EPS:
-                        continue
                     if blocking:
                         status, S, end, k, c = _place_blocking(
                             d, st, sc, ot, t, m, S0, use_waits, arm_lb

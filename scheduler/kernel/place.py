@@ -202,33 +202,6 @@ def _fit_waits(
 
 
 @njit(cache=True)
-def _end_bound(d, st, t, m, S0, chrono, arm_lb):
-    """A lower bound on the end :func:`_query` finds for task t in mode m
-    from S0 (any ``extra`` only adds to it): the mode's duration after the
-    earliest start any slot allows (chronological: the arm's last task and
-    the setup after it). Cheap: no timeline is read."""
-    a = d.mode_arm[m]
-    lb = S0
-    if arm_lb[a] > lb:
-        lb = arm_lb[a]
-    if chrono:
-        su = d.su
-        n = st.arm_n[a]
-        if n > 0:
-            prev = st.arm_t[d.arm_lo[a] + n - 1]
-            ready = st.t_end[prev]
-        else:
-            prev = -1
-            ready = d.avail[a]
-        ready += _setup(
-            su.kind, su.table, su.arm_off, su.arm_count, su.mode_slot, d.mode_of, a, prev, t
-        )
-        if ready > lb:
-            lb = ready
-    return lb + d.mode_dur[m]
-
-
-@njit(cache=True)
 def _query(d, st, sc, t, m, S0, chrono, use_waits, extra, arm_lb):
     """Earliest placement of task t in mode m from S0: (start, end, arm slot);
     the waits are left in ``sc.w``."""

@@ -2,9 +2,8 @@
 on a seeded campaign of generated problems: what the coordinator knows (tasks
 done, tasks running, tasks failed, arms out, parts late) is kept, every
 re-solved plan validates although the call does not check it by default, and
-the check changes nothing but the time; the list decoder, which skips the
-modes that cannot win, places every task as the plain loop over every mode
-does."""
+the check changes nothing but the time; the list decoder places every task
+as the plain loop over every mode does."""
 
 from __future__ import annotations
 
@@ -135,10 +134,9 @@ def test_the_phases_add_up_to_at_most_the_latency() -> None:
 
 
 def _reference_decode(p: Any, order: Any, chrono: bool, waits: bool) -> Any:
-    """The list decoder as a plain loop over every mode of every task (no
-    mode skipped by a bound): each task in the mode that ends first (ties:
-    less waiting, then the lower mode id), a task that cannot be placed yet
-    retried after the others."""
+    """The list decoder as a plain loop over every mode of every task: each
+    task in the mode that ends first (ties: less waiting, then the lower mode
+    id), a task that cannot be placed yet retried after the others."""
     inst = compile_problem(p)
     st = inst.new_state()
     pending = [int(t) for t in order]
@@ -180,8 +178,8 @@ def _reference_decode(p: Any, order: Any, chrono: bool, waits: bool) -> Any:
 def test_the_list_decoder_places_every_task_as_the_plain_loop_does(
     seed: int, chrono: bool, waits: bool, start_zones: bool
 ) -> None:
-    """The decoder skips a mode whose earliest possible end is already later
-    than the best mode's; the plain loop tries every mode: the same states."""
+    """The compiled list decoder and the plain loop give the same states
+    (chronological or not, waits at borders or not, start zones or not)."""
     p = random_problem(4, 25, 4, 1, seed=seed, start_zones=start_zones)
     rng = np.random.default_rng(seed)
     order = np.asarray(p.topological_order, dtype=np.int64)
