@@ -9,7 +9,10 @@ recorded (its inputs, its wall time in the loop, its result).
 Reported:
 
 * **in the loop** -- the wall time of each call as the simulation measured
-  it (``SimResult.metrics.resolve_latency``) and the executed makespans;
+  it (``SimResult.metrics.resolve_latency``), the part of it the cell's
+  blocking oracle spent answering questions not asked before (a detour
+  search each: once per question for the problem's lifetime), and the
+  executed makespans;
 * **replayed side by side** -- each recorded call made again, in
   alternating order, as the coordinator makes it now (``check=False``: the
   new plan is not validated in the call) and as it was made before
@@ -64,13 +67,26 @@ MODES: dict[str, dict[str, Any]] = {
 """The replayed variants: keyword overrides of the recorded call."""
 
 
+def _oracle_work(problem: Any) -> tuple[float, int]:
+    """Seconds the problem's blocking oracle has spent answering, and the
+    questions it answered (not from its cache), so far ((0, 0) without one)."""
+    stats = getattr(problem.blocking, "stats", None)
+    if stats is None:
+        return 0.0, 0
+    return float(stats.seconds), int(stats.queries - stats.cached)
+
+
 @contextmanager
-def _recording(calls: list[dict[str, Any]]) -> Iterator[None]:
-    """Record every re-solve the coordinator makes (its keywords and problem)."""
+def _recording(calls: list[dict[str, Any]], oracle: list[tuple[float, int]]) -> Iterator[None]:
+    """Record every re-solve the coordinator makes (its keywords and problem)
+    and what the blocking oracle answered within it (seconds, new answers)."""
 
     def record(problem: Any, **kw: Any) -> Rescheduled:
+        s0, n0 = _oracle_work(problem)
         res = reschedule(problem, **kw)
+        s1, n1 = _oracle_work(problem)
         calls.append({"problem": problem, **kw})
+        oracle.append(((s1 - s0) * 1e3, n1 - n0))
         return res
 
     recovery.reschedule = record  # type: ignore[assignment]
@@ -108,12 +124,13 @@ def measure(seed: int, cell: str, scenarios: int, time_limit: float, repeat: int
     plan = r.schedule
     simulate(cc, plan, seed=0, options=SimOptions(monitor=False))  # warm caches and compiled code
     calls: list[dict[str, Any]] = []
+    oracle: list[tuple[float, int]] = []
     loop_ms: list[float] = []
     runs: list[dict[str, Any]] = []
     for label, faults in _scenarios(cc, plan, scenarios, seed):
         print(f"bench_resolve_loop: {label}", file=sys.stderr, flush=True)
         before = len(calls)
-        with _recording(calls):
+        with _recording(calls, oracle):
             res = simulate(cc, plan, seed=seed, faults=faults, options=SimOptions(monitor=False))
         m = res.metrics
         lat = (np.asarray(m.resolve_latency, dtype=float) * 1e3).tolist()
@@ -123,6 +140,8 @@ def measure(seed: int, cell: str, scenarios: int, time_limit: float, repeat: int
                 "fault": label,
                 "resolves": len(calls) - before,
                 "latency_ms": lat,
+                "oracle_ms": [x[0] for x in oracle[before:]],
+                "oracle_answers": [x[1] for x in oracle[before:]],
                 "executed_makespan": float(m.executed_makespan),
                 "failed": int(m.failed_tasks),
             }
@@ -217,14 +236,22 @@ def table(r: Any) -> str:
         "",
         "## Scenarios (re-solving on)",
         "",
-        "| fault | re-solves | latency in the loop (ms) | executed makespan (s) | failed |",
-        "|---|---|---|---|---|",
+        "| fault | re-solves | latency in the loop (ms) | of which the blocking oracle "
+        "(ms, new answers) | executed makespan (s) | failed |",
+        "|---|---|---|---|---|---|",
     ]
     for sc in r["scenarios"]:
         lat = ", ".join(f"{x:.1f}" for x in sc["latency_ms"]) or "-"
+        orc = (
+            ", ".join(
+                f"{ms:.1f} ({n})"
+                for ms, n in zip(sc.get("oracle_ms", []), sc.get("oracle_answers", []), strict=True)
+            )
+            or "-"
+        )
         lines.append(
-            f"| {sc['fault']} | {sc['resolves']} | {lat} | {sc['executed_makespan']:.1f} | "
-            f"{sc['failed']} |"
+            f"| {sc['fault']} | {sc['resolves']} | {lat} | {orc} | "
+            f"{sc['executed_makespan']:.1f} | {sc['failed']} |"
         )
     lines += [
         "",
