@@ -45,7 +45,7 @@ from scheduler.kernel import compile_problem
 from scheduler.problem import Problem
 from scheduler.result import Result, SearchStats, SolveStatus
 from scheduler.schedule import Schedule, validate
-from scheduler.search import Evaluator, local_search, rank_upward
+from scheduler.search import Evaluator, Solution, local_search, rank_upward
 
 __all__ = ["CellState", "reschedule"]
 
@@ -88,6 +88,22 @@ class CellState:
     arm_busy_until: Mapping[ArmRef, float] = field(default_factory=dict)
 
 
+class _TimedEvaluator(Evaluator):
+    """An :class:`Evaluator` that adds up the wall time of its resumed
+    decodes (a measurement for :attr:`SearchStats.phases`, never used to decide)."""
+
+    decode_time = 0.0
+
+    def evaluate_resume(
+        self, order: np.ndarray, modes: np.ndarray | None = None
+    ) -> Solution | None:
+        t = time.perf_counter()
+        try:
+            return super().evaluate_resume(order, modes)
+        finally:
+            self.decode_time += time.perf_counter() - t
+
+
 def _ref(names: tuple[str, ...], ref: int | str, what: str) -> int:
     """The id of a task or arm given by name or id."""
     if isinstance(ref, str):
@@ -117,6 +133,7 @@ def reschedule(
     seed: int = 0,
     waits: bool = True,
     max_evaluations: int | None = None,
+    check: bool = True,
 ) -> Result:
     """A new schedule from ``state``, warm-started from ``previous``.
 
@@ -125,6 +142,18 @@ def reschedule(
     decoded schedules (a work limit alone makes the result depend on the
     seed only). The first valid schedule (the warm start decoded) comes
     first, whatever the limit.
+
+    With ``check`` (the default) the new schedule is checked with
+    :func:`scheduler.validate` before it is returned; ``check=False`` skips
+    that check (the decoder places every task feasibly by construction; on
+    large compiled cells the check costs more than the search), and the
+    objective is then the decoded makespan.
+
+    ``Result.stats.phases`` holds the wall seconds of the call's parts (a
+    measurement only): ``"state"`` (the frozen prefix and the decoder set
+    up), ``"first"`` (the warm start decoded), ``"search"`` (the local
+    search), ``"decodes"`` (the part of ``"first"`` and ``"search"`` spent
+    decoding), ``"build"`` (the schedule record) and ``"validate"``.
 
     Raises
     ------
@@ -174,7 +203,7 @@ def reschedule(
         k = int(base.arm_n[a])
         inst.commit(base, t, m, s, e, k, w)
     remaining = [t for t in range(p.n_tasks) if t not in frozen]
-    ev = Evaluator(
+    ev = _TimedEvaluator(
         p,
         waits=waits,
         base=base,
@@ -184,6 +213,7 @@ def reschedule(
         frozen=frozenset(frozen),
     )
     stats = SearchStats()
+    t_state = time.perf_counter()
     # warm start: the previous order (by start) and modes where still allowed
     key = np.zeros(p.n_tasks)
     modes = np.full(p.n_tasks, -1, dtype=np.int64)
@@ -204,6 +234,7 @@ def reschedule(
         sol = ev.evaluate_resume(order, free)
     if sol is not None:
         ev.anchor(sol)  # the local search resumes from its prefix
+    t_first = time.perf_counter()
     # a cheap bound (the LP of lower_bound would eat the latency budget)
     mind = p.min_duration()
     lb = max(
@@ -211,6 +242,7 @@ def reschedule(
     )
     if sol is None:
         stats.evaluations = ev.evaluations
+        stats.phases.update(state=t_state - t0, first=t_first - t_state, decodes=ev.decode_time)
         return Result(
             SolveStatus.UNKNOWN,
             None,
@@ -244,9 +276,19 @@ def reschedule(
     tp = time.perf_counter()
     sched = ev.schedule(sol)
     stats.evaluations = ev.evaluations
-    mk = validate(p, sched)
     sched = sched.bind(p)
-    took = time.perf_counter() - tp
+    tv = time.perf_counter()
+    mk = validate(p, sched) if check else float(sol.makespan)
+    te = time.perf_counter()
+    took = te - tp
+    stats.phases.update(
+        state=t_state - t0,
+        first=t_first - t_state,
+        search=tp - t_first,
+        decodes=ev.decode_time,
+        build=tv - tp,
+        validate=te - tv if check else 0.0,
+    )
     # a running estimate that follows a slowdown at once and a speed-up gently
     _POST_COST[inst] = max(took, 0.8 * _POST_COST.get(inst, took) + 0.2 * took)
     return Result(

@@ -33,6 +33,7 @@ Examples
 
 from __future__ import annotations
 
+import gc
 import math
 import time
 from collections.abc import Collection, Mapping
@@ -94,12 +95,21 @@ class Rescheduled:
         Why there is no schedule ("" when there is one).
     latency : float
         Wall-clock seconds of the call (a measurement, never used to decide).
+    phases : tuple of (str, float)
+        Wall-clock seconds of the call's parts (a measurement): ``"state"``
+        (what the coordinator knows turned into the decoder's start),
+        ``"first"`` (the warm start decoded), ``"search"`` (the local
+        search), ``"decodes"`` (the decoding within ``"first"`` and
+        ``"search"``), ``"build"`` (the schedule record) and ``"validate"``
+        (zero unless ``check``); ``"prepare"`` is the part before the
+        scheduler's online search (the dropped tasks and the warm start).
     """
 
     schedule: Schedule | None
     dropped: frozenset[int] = field(default_factory=frozenset)
     reason: str = ""
     latency: float = 0.0
+    phases: tuple[tuple[str, float], ...] = ()
 
     @property
     def makespan(self) -> float:
@@ -146,8 +156,13 @@ def reschedule(
     evaluations: int = 200,
     time_limit: float = 1e6,
     seed: int = 0,
+    check: bool = False,
 ) -> Rescheduled:
     """A new plan from what the coordinator knows (module docstring).
+
+    The call is latency-critical: Python's cyclic garbage collector is held
+    off while it runs (a full collection of a long simulation's garbage can
+    take a second) and runs again afterwards as before.
 
     Parameters
     ----------
@@ -174,6 +189,11 @@ def reschedule(
     time_limit : float
         Seconds of wall clock (large by default: the work limit decides).
     seed : int
+    check : bool
+        Check the new plan with :func:`scheduler.validate` before returning
+        it (off by default: the decoder places every task feasibly by
+        construction, and on a large compiled cell the check costs more than
+        the rest of the call; the tests check the plans).
 
     Returns
     -------
@@ -184,6 +204,45 @@ def reschedule(
     UsageError
         A task index or arm index out of range.
     """
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return _reschedule(
+            problem,
+            now=now,
+            previous=previous,
+            done=done,
+            running=running,
+            failed=failed,
+            arms_out=arms_out,
+            parts_late=parts_late,
+            evaluations=evaluations,
+            time_limit=time_limit,
+            seed=seed,
+            check=check,
+        )
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _reschedule(
+    problem: Problem,
+    *,
+    now: float,
+    previous: Schedule,
+    done: Mapping[int, FrozenTask] | None = None,
+    running: Mapping[int, FrozenTask] | None = None,
+    failed: Collection[int] = (),
+    arms_out: Collection[int] = (),
+    parts_late: Mapping[int, float] | None = None,
+    evaluations: int = 200,
+    time_limit: float = 1e6,
+    seed: int = 0,
+    check: bool = False,
+) -> Rescheduled:
+    """:func:`reschedule` with the collector held off."""
+    t_in = time.perf_counter()
     p = problem
     done = dict(done or {})
     running = dict(running or {})
@@ -232,9 +291,20 @@ def reschedule(
     t0 = time.perf_counter()
     new: Schedule | None = None
     err = ""
+    phases: dict[str, float] = {"prepare": t0 - t_in}
     for limit in (evaluations, 1):
         try:
-            res = _online(p, state, warm, time_limit=time_limit, seed=seed, max_evaluations=limit)
+            res = _online(
+                p,
+                state,
+                warm,
+                time_limit=time_limit,
+                seed=seed,
+                max_evaluations=limit,
+                check=check,
+            )
+            for part, v in res.stats.phases.items():
+                phases[part] = phases.get(part, 0.0) + v
             new = res.schedule
             err = "" if new is not None else f"no schedule ({res.status.value})"
         except (ScheduleError, UsageError) as exc:
@@ -247,4 +317,6 @@ def reschedule(
             new, err = None, "a task that can run was planned after the dropped ones"
             continue
         break
-    return Rescheduled(new, frozenset(dead), err, time.perf_counter() - t0)
+    return Rescheduled(
+        new, frozenset(dead), err, time.perf_counter() - t_in, tuple(sorted(phases.items()))
+    )

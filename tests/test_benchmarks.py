@@ -25,6 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_outside",
         "bench_scale",
         "bench_resolve",
+        "bench_resolve_loop",
         "bench_geometry",
         "bench_oracle",
         "bench_cells",
