@@ -33,11 +33,13 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import gc
 import math
 import time
-from collections.abc import Collection, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
+from typing import ParamSpec, TypeVar
 
 import numpy as np
 
@@ -143,6 +145,28 @@ def _dropped(
     return out
 
 
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+
+
+def _collector_held(f: Callable[_P, _R]) -> Callable[_P, _R]:
+    """``f`` with Python's cyclic garbage collector held off while it runs
+    (and enabled again afterwards if it was)."""
+
+    @functools.wraps(f)
+    def held(*args: _P.args, **kwargs: _P.kwargs) -> _R:
+        enabled = gc.isenabled()
+        gc.disable()
+        try:
+            return f(*args, **kwargs)
+        finally:
+            if enabled:
+                gc.enable()
+
+    return held
+
+
+@_collector_held
 def reschedule(
     problem: Problem,
     *,
@@ -204,44 +228,6 @@ def reschedule(
     UsageError
         A task index or arm index out of range.
     """
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        return _reschedule(
-            problem,
-            now=now,
-            previous=previous,
-            done=done,
-            running=running,
-            failed=failed,
-            arms_out=arms_out,
-            parts_late=parts_late,
-            evaluations=evaluations,
-            time_limit=time_limit,
-            seed=seed,
-            check=check,
-        )
-    finally:
-        if enabled:
-            gc.enable()
-
-
-def _reschedule(
-    problem: Problem,
-    *,
-    now: float,
-    previous: Schedule,
-    done: Mapping[int, FrozenTask] | None = None,
-    running: Mapping[int, FrozenTask] | None = None,
-    failed: Collection[int] = (),
-    arms_out: Collection[int] = (),
-    parts_late: Mapping[int, float] | None = None,
-    evaluations: int = 200,
-    time_limit: float = 1e6,
-    seed: int = 0,
-    check: bool = False,
-) -> Rescheduled:
-    """:func:`reschedule` with the collector held off."""
     t_in = time.perf_counter()
     p = problem
     done = dict(done or {})
