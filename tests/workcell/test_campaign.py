@@ -548,3 +548,33 @@ def test_crashes_at_and_next_to_task_boundaries_on_parking_find_nothing(
                 where = (arm, at + off, medium)
                 assert (frame["status"] == "done").all(), where
                 assert check_tasks(cc, faults, False, frame) == (), where
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="open finding: an arm left idle for good by a part that never comes "
+    "stands where the plan had it move on, and nothing moves it out of another "
+    "arm's way (S2.6 backs off only arms that wait on a leg)",
+)
+@pytest.mark.parametrize("coordination", COORDINATIONS)
+def test_an_arm_idle_for_good_in_the_way_of_another(coordination: str) -> None:
+    # campaign seed 5 on parking, episode 4336 (`multiarm campaign parking
+    # --replay 5:4336`, drawn with the distributed policy, ideal medium): part
+    # 'blank2' never comes, so 'sb' fails 'press2' and 'restock' and stays at
+    # the end pose of 'press1'; 'sa''s 'deliver1' passes through that pose, no
+    # detour gets around it, and 'sa' is held until its tasks fail with
+    # "unresolved geometric deadlock" although 'sb' has nothing left to do.
+    # The same episode fails the same way under either policy, re-solving on
+    # or off.
+    from dataclasses import replace
+
+    from workcell.campaign.episodes import (
+        check_result,
+        draw_episode,
+        prepare,
+        simulate_episode,
+    )
+
+    cc = prepare("parking")
+    episode = replace(draw_episode(cc, 5, 4336), coordination=coordination)
+    assert check_result(cc, episode, simulate_episode(cc, episode)) == ()
