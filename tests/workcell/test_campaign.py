@@ -550,22 +550,18 @@ def test_crashes_at_and_next_to_task_boundaries_on_parking_find_nothing(
                 assert check_tasks(cc, faults, False, frame) == (), where
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open finding: an arm left idle for good by a part that never comes "
-    "stands where the plan had it move on, and nothing moves it out of another "
-    "arm's way (S2.6 backs off only arms that wait on a leg)",
-)
+@pytest.mark.parametrize("resolve", [True, False])
 @pytest.mark.parametrize("coordination", COORDINATIONS)
-def test_an_arm_idle_for_good_in_the_way_of_another(coordination: str) -> None:
+def test_an_arm_idle_for_good_in_the_way_of_another(coordination: str, resolve: bool) -> None:
     # campaign seed 5 on parking, episode 4336 (`multiarm campaign parking
     # --replay 5:4336`, drawn with the distributed policy, ideal medium): part
     # 'blank2' never comes, so 'sb' fails 'press2' and 'restock' and stays at
     # the end pose of 'press1'; 'sa''s 'deliver1' passes through that pose, no
-    # detour gets around it, and 'sa' is held until its tasks fail with
-    # "unresolved geometric deadlock" although 'sb' has nothing left to do.
-    # The same episode fails the same way under either policy, re-solving on
-    # or off.
+    # detour gets around it, and 'sa' was held until its tasks failed with
+    # "unresolved geometric deadlock" although 'sb' had nothing left to do,
+    # under either policy, re-solving on or off. S2.6's back-off now also
+    # sends an arm that stands idle with nothing left to do to its home
+    # joints (it stays there), so 'sa' goes on.
     from dataclasses import replace
 
     from workcell.campaign.episodes import (
@@ -576,5 +572,9 @@ def test_an_arm_idle_for_good_in_the_way_of_another(coordination: str) -> None:
     )
 
     cc = prepare("parking")
-    episode = replace(draw_episode(cc, 5, 4336), coordination=coordination)
-    assert check_result(cc, episode, simulate_episode(cc, episode)) == ()
+    episode = replace(draw_episode(cc, 5, 4336), coordination=coordination, resolve=resolve)
+    result = simulate_episode(cc, episode)
+    assert check_result(cc, episode, result) == ()
+    done = dict(zip(result.tasks_frame()["task"], result.tasks_frame()["status"], strict=True))
+    assert done["deliver1"] == done["pack1"] == "done"
+    assert any("out of arm 'sa''s way" in str(e.detail) for e in result.trace.of_kind("detour"))

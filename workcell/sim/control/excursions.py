@@ -122,16 +122,28 @@ def back_off(self: _Self, traj: JointTrajectory) -> bool:
     """Retreat along ``traj`` (to the home joints) out of a mover's way
     (S2.6 geometric deadlock); the coordination chose it, checked its way
     and orders the way back once the mover has passed. Returns whether the
-    retreat started."""
+    retreat started.
+
+    An idle arm (no trajectory: the coordination orders this only when it
+    has nothing left to do) goes home and stays there: no way back is kept,
+    and a later trajectory starts from where it then stands."""
     if (
         self.away is not None
         or self.running
         or self.failed
-        or self.leg is None
         or self.pushing  # not out of a hole in the middle of a search
         or traj.duration <= 0
     ):
         return False
+    if self.leg is None:
+        self._close_segment()
+        self.leg = Leg("retreat", self.pose_task, -1, traj, [Station(traj.duration, end=True)])
+        self.k, self.tau, self.t_ref = 0, 0.0, self.kernel.now
+        self.at_station = False
+        self.stops.discard("geometry")
+        self.internal("STOP_D", self.pose_task, "idle in a mover's way: to the home joints")
+        self._run()
+        return True
     task = self.leg.task
     self._close_segment()
     self.away = Excursion(self.leg, self.k, self.tau, self.at_station)

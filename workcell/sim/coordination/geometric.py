@@ -33,6 +33,7 @@ from workcell.sim.protocol.exchange import (
     TaskStarted,
 )
 from workcell.sim.protocol.messages import Leg, Station
+from workcell.sim.protocol.states import TaskState
 
 _Self = Any
 """The :class:`~workcell.sim.coordination.centralized.Coordinator` these functions are methods of (bound in its
@@ -228,20 +229,40 @@ def back_off(self: _Self, b: int, until: BackOffUntil) -> bool:
     if it can go (standing on a leg, not pushing, not already away) and
     its way home is free. Returns whether it was ordered."""
     v = self.book[b]
-    if v.away or v.running or v.failed or v.leg is None or v.pushing or self.cleared[b]:
+    idle = done_for_good(self, b)
+    if v.away or v.running or v.failed or v.pushing or self.cleared[b]:
+        return False
+    if v.leg is None and not idle:
         return False
     arm = self.cc.cell.arms[b]
     home = np.asarray(self.cc.cell.start[b], dtype=float)
     traj = arm.move(v.position(self.kernel.now), home, arm.interpolation)
     if traj.duration <= 0:
         return False
-    retreat = Leg("retreat", v.leg.task, -1, traj, [Station(traj.duration, end=True)])
+    task = v.leg.task if v.leg is not None else -1
+    retreat = Leg("retreat", task, -1, traj, [Station(traj.duration, end=True)])
     probe = ArmView(b, retreat, 0, 0.0, v.t_ref, False, v.q, v.at_station)
     if self.blockers(probe):  # the way back home is not free either
         return False
     self.channel.order(b, BackOff(traj))
-    self.away_until[b] = until
+    if not idle:  # an idle arm stays home: nothing to come back to
+        self.away_until[b] = until
     return True
+
+
+def done_for_good(self: _Self, b: int) -> bool:
+    """Arm ``b`` stands idle with nothing left to do: no trajectory, and
+    every task the plan gives it done or failed (a part that never came, a
+    predecessor that failed). Such an arm may stand where the plan had it
+    move on, in another arm's way: it is sent home (S2.6)."""
+    v = self.book[b]
+    if v.leg is not None or v.running or v.failed or v.away or self.cleared[b]:
+        return False
+    arm_of = self.p.mode_arm[self.plan.mode]
+    return all(
+        self.status[t] in (TaskState.DONE, TaskState.FAILED)
+        for t in np.flatnonzero(arm_of == b).tolist()
+    )
 
 
 def arm_moved(self: _Self) -> None:
@@ -307,7 +328,9 @@ def _recheck(self: _Self) -> None:
             self.backoffs < self.max_backoffs
             and ctl.leg is not None
             and all(
-                self.book[b].waiting and not self.book[b].away and not self.cleared[b]
+                (self.book[b].waiting or done_for_good(self, b))
+                and not self.book[b].away
+                and not self.cleared[b]
                 for b in found
             )
         ):

@@ -203,6 +203,15 @@ class DistributedPolicy:
             return str(self.p.tool_names[piece.resource])
         return str(self.p.zone_names[piece.resource])
 
+    def done_for_good(self, a: int) -> bool:
+        """Every task the plan gives arm ``a`` is done or failed (asked by
+        ``a``'s own peer, of its own tasks' records only)."""
+        return all(
+            self.status[t] in (TaskState.DONE, TaskState.FAILED)
+            for t in range(self.p.n_tasks)
+            if arm_of(self.p, self.plan, t) == a
+        )
+
     def set_status(self, t: int, new: TaskState) -> None:
         """Move task ``t`` to ``new`` (checked against the task machine)."""
         TASK_MACHINE.check(self.status[t], new)

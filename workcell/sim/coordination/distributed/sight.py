@@ -119,6 +119,8 @@ class SightHost(Protocol):
     recheck_limit: int
     max_stalled: int
 
+    def done_for_good(self, a: int) -> bool: ...
+
 
 @dataclass(slots=True)
 class _Round:
@@ -423,7 +425,10 @@ class Sight:
             self.backoffs < h.max_backoffs
             and own.leg is not None
             and all(
-                self.view[b].waiting and not self.view[b].away and not self.reserved.get(b)
+                # an idle arm may have nothing left to do: its own peer decides
+                (self.view[b].waiting or (self.view[b].leg is None and not self.view[b].running))
+                and not self.view[b].away
+                and not self.reserved.get(b)
                 for b in found
             )
         ):
@@ -441,16 +446,19 @@ class Sight:
         h, a = self.h, self.a
         v = self.view[a]
         self.wanted = None
+        # an idle arm with nothing left to do (its part never came, say) may
+        # stand where the plan had it move on: it goes home and stays there
+        idle = v.leg is None and not v.running and h.done_for_good(a)
         if (
             v.away
             or v.failed
-            or v.leg is None
+            or (v.leg is None and not idle)
             or v.pushing
             or self.away_until is not None
             or self.backoffs >= h.max_backoffs
         ):
             return
-        if v.running or not v.waiting or self.round is not None:
+        if v.running or not (v.waiting or idle) or self.round is not None:
             self.wanted = until  # not now: again when something changes
             return
         arm = h.cc.cell.arms[a]
@@ -458,11 +466,13 @@ class Sight:
         traj = arm.move(v.position(h.kernel.now), home, arm.interpolation)
         if traj.duration <= 0:
             return
-        retreat = Leg("retreat", v.leg.task, -1, traj, [Station(traj.duration, end=True)])
+        task = v.leg.task if v.leg is not None else -1
+        retreat = Leg("retreat", task, -1, traj, [Station(traj.duration, end=True)])
         if self.blockers(ArmView(a, retreat, 0, 0.0, v.t_ref, False, v.q, v.at_station)):
             self.wanted = until  # the way back home is not free now: again when it may be
             return
-        self.away_until = until
+        if not idle:  # an idle arm stays home: nothing to come back to
+            self.away_until = until
         self.backoffs += 1
         self.detours += 1
         h.trace.add(
