@@ -63,8 +63,9 @@ def _no_overlap(r: Any) -> None:
 def test_every_small_cell_runs_on_every_medium(name: str, medium: str) -> None:
     """No failed task, a clean monitor (simulate raises SafetyViolation
     otherwise), each resource used by one task at a time, and no frame to or
-    from station 0 but the peers' broadcasts (station 0 is an empty place on
-    the medium): there is no coordinator."""
+    from station 0 but the peers' broadcasts (alarms, and on a medium whose
+    broadcast is one transfer the views and departure requests; station 0 is
+    an empty place on the medium): there is no coordinator."""
     r = _run(name, medium)
     tf = r.tasks_frame()
     assert (tf["status"] == "done").all(), tf[tf["status"] != "done"]
@@ -73,10 +74,10 @@ def test_every_small_cell_runs_on_every_medium(name: str, medium: str) -> None:
     _no_overlap(r)
     msgs = _messages(r)
     assert all(e.src != 0 for e in msgs)
-    assert all(e.message in ("alarm", "wake_up") for e in msgs if e.dst == 0)
-    assert r.metrics.messages >= len({(e.src, e.time, e.message) for e in msgs}) > 0 or (
-        r.problem.n_arms == 1
-    )
+    broadcast = ("alarm", "wake_up", "motion_report", "departure_request")
+    assert all(e.message in broadcast for e in msgs if e.dst == 0)
+    sent = {(e.src, round(e.time - e.delay, 9), e.message) for e in msgs}  # one per broadcast
+    assert r.metrics.messages >= len(sent) > 0 or (r.problem.n_arms == 1)
 
 
 @pytest.mark.parametrize("name", ("supersigma", "scara4"))
@@ -105,6 +106,32 @@ def test_peers_ask_only_the_arms_that_may_interfere() -> None:
     assert {(e.src, e.dst) for e in replies} == {(e.dst, e.src) for e in asks}
     # a peer never sends itself a frame, and no trajectory crosses the medium
     assert not [e for e in msgs if e.message == "trajectory"]
+
+
+@pytest.mark.parametrize("medium", ["ideal", "serial-star"])
+def test_a_departure_request_is_one_broadcast_where_the_medium_broadcasts_once(
+    medium: str,
+) -> None:
+    """On a medium whose broadcast is one transfer (``ideal``, as the serial
+    bus, Multibus II and the Ethernet bus) a peer sends each departure
+    request once, and every station takes that one frame (station 0 and the
+    arms that cannot meet the asker do not read it); on the serial star
+    (whose hub would relay a broadcast on every line) one frame goes to
+    each arm that may meet. Either way each request is answered by every
+    arm asked."""
+    r = _run("urdf_cell", medium)
+    n = r.problem.n_arms
+    asks = [e for e in _messages(r) if e.message == "departure_request"]
+    assert asks
+    takers: dict[tuple[int, float], set[int]] = {}
+    for e in asks:
+        takers.setdefault((e.src, e.time), set()).add(e.dst)
+    if medium == "ideal":
+        assert all(dst == set(range(n + 1)) - {src} for (src, _t), dst in takers.items())
+    else:
+        assert not [e for e in asks if e.dst == 0]
+    answers = [e for e in _messages(r) if e.message == "motion_report" and e.dst != 0]
+    assert {(e.dst, e.src) for e in asks if e.dst != 0} <= {(e.src, e.dst) for e in answers}
 
 
 def test_same_seed_same_trace_under_faults() -> None:

@@ -43,12 +43,20 @@ def _parking() -> Any:
     return prepare("parking")
 
 
-def _wired(cc: Any, latency: float, loss: Any = None, seed: int = 0) -> Any:
+class _PointToPoint(FixedLatencyMedium):
+    """The fixed-latency medium with a broadcast taken as dear as one frame
+    per station (as the serial star): the peers send one frame per arm."""
+
+    broadcast_once = False
+
+
+def _wired(cc: Any, latency: float, loss: Any = None, seed: int = 0, broadcast: bool = True) -> Any:
     kernel = EventLoop()
     trace = Trace()
     n = cc.problem.n_arms
     names = ["coordinator", *cc.problem.arm_names]
-    med = FixedLatencyMedium(kernel, stations=n + 1, latency=latency)
+    kind = FixedLatencyMedium if broadcast else _PointToPoint
+    med = kind(kernel, stations=n + 1, latency=latency)
     link = Link(kernel, med, trace, names, loss, np.random.default_rng(seed))
     channel = ControlChannel(n, link)
     for a in range(n):
@@ -83,7 +91,7 @@ def _departures(orders: list[tuple[float, Any]]) -> list[Departure]:
     return [o for _t, o in orders if isinstance(o, Departure)]
 
 
-@settings(max_examples=120, deadline=None, derandomize=True)
+@settings(max_examples=160, deadline=None, derandomize=True)
 @given(
     modes=st.tuples(st.sampled_from([2, 3]), st.sampled_from([0, 1, 4])),
     cuts=st.tuples(*[st.floats(0.0, 1.0) for _ in range(4)]),
@@ -92,6 +100,7 @@ def _departures(orders: list[tuple[float, Any]]) -> list[Departure]:
     loss=st.sampled_from([0.0, 0.3]),
     first=st.sampled_from([0, 1]),
     seed=st.integers(0, 2**16),
+    broadcast=st.booleans(),
 )
 def test_two_arms_asking_at_once_never_both_set_off_into_each_other(
     modes: tuple[int, int],
@@ -101,6 +110,7 @@ def test_two_arms_asking_at_once_never_both_set_off_into_each_other(
     loss: float,
     first: int,
     seed: int,
+    broadcast: bool,
 ) -> None:
     """Seeded random timing campaign on ``parking``'s two arms, the real
     geometric check: both controllers ask to set off on motions drawn from
@@ -110,16 +120,20 @@ def test_two_arms_asking_at_once_never_both_set_off_into_each_other(
     any time) touch nowhere; if each motion is clear of the other arm where
     it stands, they do not both stand (the clock orders them). Then the
     arm that went reports that it stands at its station: a held arm whose
-    way is now clear is released (watch and notify), and only then."""
+    way is now clear is released (watch and notify), and only then. Drawn
+    with the requests and views sent as one broadcast (a medium whose
+    broadcast is one transfer) and as one frame per arm."""
     cc = _parking().compiled
     loss_model = MessageLoss(loss, timeout=4e-3) if loss else None
-    kernel, _trace, channel, orders = _wired(cc, latency, loss_model, seed)
+    kernel, trace, channel, orders = _wired(cc, latency, loss_model, seed, broadcast)
     DistributedPolicy(cc, _parking().schedule, kernel, channel.link, Trace(), channel)
     f = sorted(cuts[:2]), sorted(cuts[2:])
     views = [_motion(cc, 0, modes[0], *f[0]), _motion(cc, 1, modes[1], *f[1])]
     kernel.schedule(0.0, channel.report, first, DepartureRequest(views[first], 1))
     kernel.schedule(lag, channel.report, 1 - first, DepartureRequest(views[1 - first], 1))
     kernel.run(until=1.0)
+    asked = [e.dst for e in trace.of_kind("message") if e.message == "departure_request"]
+    assert 0 in asked if broadcast else 0 not in asked  # station 0 hears a broadcast
     answers = [_departures(orders[a]) for a in (0, 1)]
     assert [len(x) for x in answers] == [1, 1]
     go = [answers[a][0].go for a in (0, 1)]

@@ -256,6 +256,9 @@ class EthernetMedium(BaseMedium):
         For fewer than two stations, non-finite positions or a bad order.
     """
 
+    broadcast_once = True
+    """One transmission on the bus: every station hears it."""
+
     def __init__(
         self,
         kernel: EventLoop,

@@ -85,6 +85,10 @@ class Link:
         self.sent = 0
         self.retransmissions = 0
         self.delays: list[float] = []
+        self.broadcast_once = bool(getattr(medium, "broadcast_once", False))
+        """A broadcast costs the medium one frame (:attr:`~workcell.sim.comms.
+        medium.BaseMedium.broadcast_once`): a sender with one frame for
+        several stations may broadcast it."""
         for st in range(len(names)):
             medium.attach(st, self._receiver(st))
         medium.on_drop(self._dropped)

@@ -317,6 +317,15 @@ class BaseMedium:
         For fewer than two stations or a list that is not 0..n-1.
     """
 
+    broadcast_once: bool = False
+    """A :data:`BROADCAST` frame costs this medium what one frame to one
+    station costs (one transfer that every station hears: a bus). Senders
+    with the same frame for several stations may then send it once as a
+    broadcast (the distributed peers do, :mod:`workcell.sim.coordination.
+    distributed.sight`); on a medium where it is ``False`` (a star that
+    relays a broadcast on every line) they send one frame per addressee. A
+    medium that is not a :class:`BaseMedium` is taken as ``False``."""
+
     def __init__(self, kernel: EventLoop, stations: int | Sequence[int]) -> None:
         n = stations if isinstance(stations, int) else len(stations)
         if not isinstance(stations, int) and list(stations) != list(range(n)):
@@ -449,6 +458,9 @@ class IdealMedium(BaseMedium):
         Stations.
     """
 
+    broadcast_once = True
+    """One delivery event reaches every station."""
+
     def _transmit(self, frame: Frame) -> None:
         self.kernel.schedule(0.0, self._deliver_all, frame)
 
@@ -477,6 +489,9 @@ class FixedLatencyMedium(BaseMedium):
         if not (latency >= 0 and math.isfinite(latency)):
             raise ValidationError(f"FixedLatencyMedium: latency must be >= 0, got {latency!r}")
         self.latency = float(latency)
+
+    broadcast_once = True
+    """One delivery, ``latency`` later, reaches every station."""
 
     def _transmit(self, frame: Frame) -> None:
         self.kernel.schedule(self.latency, self._deliver_all, frame)

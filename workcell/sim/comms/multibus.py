@@ -137,6 +137,10 @@ class MultibusII(BaseMedium):
         self._free_at = 0.0
         self.transfers = 0
 
+    broadcast_once = True
+    """A broadcast goes as unsolicited messages, the same bus transfers as
+    one to one agent (the solicited kinds are never broadcast)."""
+
     def _transfer(self, at: float, nbytes: int) -> float:
         """Reserve the bus for one transfer of ``nbytes``; return its end."""
         start = max(at, self._free_at)

@@ -199,6 +199,9 @@ class SerialBus(BaseMedium):
         self.header_bytes = header_bytes
         self._line = _Line()
 
+    broadcast_once = True
+    """One transfer on the one line: every station hears it."""
+
     def _transmit(self, frame: Frame) -> None:
         t = self._send_on(frame)
         self.kernel.schedule(t, self._deliver_all, frame, absolute=True)

@@ -7,7 +7,15 @@ frames it takes on the medium; nothing is shared between peers.
   station holds, the arms that may ever meet its own (:func:`~.reach.may_meet`:
   two arms whose workspace balls overlap; a ball holds every pose the arm
   can take within its joint limits). It tells only those arms where its
-  arm is and asks only them before it sets off.
+  arm is and asks only them before it sets off. On a medium whose
+  broadcast is one transfer that every station hears (the serial bus,
+  Multibus II, Ethernet and CSMA/DCR, and the ideal and fixed-latency
+  media: :attr:`~workcell.sim.comms.medium.BaseMedium.broadcast_once`)
+  the view and the request go out once, as a broadcast, instead of one
+  frame per such arm; a peer that hears a broadcast from an arm that cannot
+  meet its own does not read it. The answers stay point to point. On the
+  serial star, whose hub relays a broadcast on every line, one frame goes
+  to each arm.
 * **Its own view.** :class:`Sight` keeps one
   :class:`~workcell.sim.protocol.exchange.ArmView` per arm: its own arm's
   from its controller's reports at the station, the others' from the
@@ -33,7 +41,12 @@ frames it takes on the medium; nothing is shared between peers.
   free, as the centralized coordinator) against its view and the motions
   it reserved for others, and answers its controller *continue* or *stop*.
 
-  Why it is sound: take two motions of arms A and B that overlap in time.
+  Why it is sound: the argument below needs only that every arm that may
+  meet the asker takes the request (once: the link drops a duplicate) and
+  answers it, and that the asker decides only with every answer in; a
+  broadcast request is the same record taken by the same peers as the
+  frames one per arm (a lost broadcast is sent again whole), so the
+  argument holds for both. Take two motions of arms A and B that overlap in time.
   A set off only after B's answer, B only after A's. If B decided its
   departure before it answered A, the answer showed B moving on that
   motion, and A's check saw it. Otherwise B answered A first, and so held
@@ -46,6 +59,18 @@ frames it takes on the medium; nothing is shared between peers.
   once are ordered by the clock: the first decides against the other's
   standing pose, the second against the first one's motion, so they never
   both set off into each other, and never both hold each other back.
+* **Why every asked arm answers.** An answer is not only consent: it is
+  the point after which the answering peer holds the motion reserved, and
+  the asker cannot tell a peer that took the request and saw no conflict
+  from one that has not taken it yet (frames are delayed, lost and sent
+  again with no bound known to the asker). Letting a silent peer count as
+  consenting would let the asker set off while the request is still on its
+  way to a peer that then sets off into it, so every asked peer answers.
+  Asking fewer arms per departure (the arms whose *remaining* planned
+  motions can meet the asked one) is not sound either: a detour (an OMPL
+  path anywhere within the joint limits) and a back-off to the home joints
+  leave the planned motions, so only the workspace bound of
+  :func:`~.reach.may_meet` holds for every motion an arm can make.
 * **Held arms** are looked at again when a frame says another arm started,
   stopped or failed, or a reservation ended (watch and notify): a clear
   way ends the hold (the controller asks again, a new round), else the
@@ -71,6 +96,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from workcell.geometry import ObstacleSet, plan_detour
+from workcell.sim.comms.medium import BROADCAST
 from workcell.sim.coordination.geometric import initial_book
 from workcell.sim.protocol.exchange import (
     ArmView,
@@ -189,13 +215,22 @@ class Sight:
         if b not in self.out:
             self.h.link.send(self.station, b + 1, kind, payload)
 
+    def _send_near(self, kind: str, payload: Any) -> None:
+        """Send ``payload`` to every working arm that may meet this one: one
+        broadcast where the medium's broadcast is one transfer
+        (:attr:`~workcell.sim.comms.link.Link.broadcast_once`; the others
+        that hear it ignore it), else one frame per arm."""
+        if self.h.link.broadcast_once:
+            self.h.link.send(self.station, BROADCAST, kind, payload)
+            return
+        for b in sorted(self.near):
+            self._send(b, kind, payload)
+
     def _tell(self) -> None:
         """Tell the arms that may meet this one where it is."""
         if self.near - self.out:
             self.n += 1
-            msg = PeerView(self.view[self.a], self.n, self.decided)
-            for b in sorted(self.near):
-                self._send(b, "motion_report", msg)
+            self._send_near("motion_report", PeerView(self.view[self.a], self.n, self.decided))
 
     # ------------------------------------------------------------ own arm
     def own_report(self, report: Report) -> None:
@@ -223,9 +258,9 @@ class Sight:
             self._decide()
             return
         self.n += 1
-        msg = Clearance(req.view, self.n, self.decided, req.ask, self.clock)
-        for b in sorted(live):
-            self._send(b, "departure_request", msg)
+        self._send_near(
+            "departure_request", Clearance(req.view, self.n, self.decided, req.ask, self.clock)
+        )
 
     def _decide(self) -> None:
         """Every answer is in: *continue* or *stop* (S2.12)."""
@@ -283,7 +318,11 @@ class Sight:
 
     # ------------------------------------------------------------ peers' frames
     def from_peer(self, b: int, payload: Any) -> None:
-        """A frame of the peer of arm ``b`` (a view, a request, an answer, a back-off)."""
+        """A frame of the peer of arm ``b`` (a view, a request, an answer, a
+        back-off); a broadcast view or request of an arm that cannot meet
+        this one is not read."""
+        if isinstance(payload, (PeerView, Clearance)) and b not in self.near:
+            return
         if isinstance(payload, PeerView):
             self._take(b, payload.n, payload.view, payload.decided)
         elif isinstance(payload, Clearance):
