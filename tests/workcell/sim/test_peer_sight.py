@@ -248,3 +248,25 @@ def test_may_meet_holds_every_sampled_contact(cell: Any, scara4: Any) -> None:
                 d = np.linalg.norm(ca[:, None, :] - cb[None, :, :], axis=2)
                 if (d <= ra[:, None] + rb[None, :]).any():
                     assert b in near[a] and a in near[b], (name, a, b)
+
+
+def test_peers_share_no_check_and_no_task_record() -> None:
+    """Nothing a peer writes is another's: each peer has its own geometric
+    check (its own caches), each publishes the records of its own tasks
+    only, and the policy's task states are read from those records."""
+    cc = _parking().compiled
+    plan = _parking().schedule
+    kernel, _trace, channel, _orders = _wired(cc, 0.0)
+    policy = DistributedPolicy(cc, plan, kernel, channel.link, Trace(), channel)
+    guards = [peer.sight.guard for peer in policy.peers]
+    assert all(g is not None for g in guards)
+    assert len({id(g) for g in guards}) == len(policy.peers)
+    p = cc.problem
+    for peer in policy.peers:
+        own = {t for t in range(p.n_tasks) if int(p.mode_arm[int(plan.mode[t])]) == peer.a}
+        assert set(peer.status) == own
+    first = policy.peers[0].tasks[0]
+    policy.peers[0].task_failed(first, "a test", "insertion")
+    assert policy.status[first] == "failed"
+    assert (policy.cause[first], policy.cause_kind[first]) == ("a test", "insertion")
+    assert all(policy.peers[1].status[t] == "pending" for t in policy.peers[1].tasks if t != first)

@@ -52,10 +52,18 @@ class CoordinationPolicy(Protocol):
     def book(self) -> list[ArmView]:
         """Per arm, its motion as the policy knows it (the arm's last report)."""
 
-    status: list[TaskState]
-    """Per task, its state."""
-    cause: list[str]
-    cause_kind: list[str]
+    @property
+    def status(self) -> list[TaskState]:
+        """Per task, its state (a published record: the harness reads it)."""
+
+    @property
+    def cause(self) -> list[str]:
+        """Per task, why it failed ("" if it did not)."""
+
+    @property
+    def cause_kind(self) -> list[str]:
+        """Per task, the category of :attr:`cause`."""
+
     plan: Schedule
     """The plan followed now (after any re-solve)."""
     dropped: frozenset[int]

@@ -60,7 +60,7 @@ from workcell.sim.protocol.peers import (
     Reply,
     Resource,
 )
-from workcell.sim.protocol.states import TaskState
+from workcell.sim.protocol.states import TASK_MACHINE, TaskState
 
 if TYPE_CHECKING:
     from scheduler import Problem, Schedule
@@ -83,15 +83,10 @@ class PeerHost(Protocol):
     kernel: EventLoop
     link: Link
     trace: Trace
-    status: list[TaskState]
-    cause: list[str]
-    cause_kind: list[str]
     failed_arms: set[int]
     orders: dict[Resource, list[Piece]]
     position: dict[Piece, int]
     start_pieces: list[list[Piece]]
-
-    def set_status(self, t: int, new: TaskState) -> None: ...
 
     def owner(self, piece: Piece) -> int: ...
 
@@ -110,8 +105,8 @@ class Peer:
     Parameters
     ----------
     shared : PeerHost
-        The run's plan replica, clock, link and the published task records
-        (a peer writes only the records of its own tasks).
+        The run's clock, link and trace, and the tables every station
+        derives from the plan it holds (read only).
     a : int
         The arm's index (its station is ``a + 1``).
     deliver : callable
@@ -133,6 +128,13 @@ class Peer:
             key=lambda t: (float(plan.start[t]), t),
         )
         self.release = {t: float(p.task_release[t]) for t in self.tasks}
+        self.status: dict[int, TaskState] = dict.fromkeys(self.tasks, TaskState.PENDING)
+        """Per own task, its state: the peer's published record (no other
+        peer reads it; the harness reads it at the end of a run)."""
+        self.cause: dict[int, tuple[str, str]] = {}
+        """Per own failed task, its cause and the cause's category
+        (:data:`~workcell.sim.coordination.constants.CAUSE_KINDS`): published
+        with :attr:`status`."""
         self.prev = -1
         self.busy = False
         self.dispatch_h: Handle | None = None
@@ -171,6 +173,16 @@ class Peer:
         """Activations this arm raised: id -> the arms that confirmed their stop."""
         self.raised: dict[int, Activation] = {}
 
+    # ------------------------------------------------------------ own records
+    def set_status(self, t: int, new: TaskState) -> None:
+        """Move own task ``t`` to ``new`` (checked against the task machine)."""
+        TASK_MACHINE.check(self.status[t], new)
+        self.status[t] = new
+
+    def done_for_good(self) -> bool:
+        """Every task the plan gives this arm is done or failed."""
+        return all(st in (TaskState.DONE, TaskState.FAILED) for st in self.status.values())
+
     # ------------------------------------------------------------ dispatch
     def start(self) -> None:
         """Schedule the releases of the arm's tasks, dispatch the first."""
@@ -182,7 +194,7 @@ class Peer:
 
     def _next_task(self) -> int:
         for t in self.tasks:
-            if self.s.status[t] == TaskState.PENDING:
+            if self.status[t] == TaskState.PENDING:
                 return t
         return -1
 
@@ -203,7 +215,7 @@ class Peer:
             return
         first = any(q not in self.over for q in s.start_pieces[self.a])
         legs = build_legs(s.cc, s.plan, self.sight.view[self.a], t, first)
-        s.set_status(t, TaskState.DISPATCHED)
+        self.set_status(t, TaskState.DISPATCHED)
         self.prev = t
         permit = self._startable(t)
         if permit:
@@ -217,7 +229,7 @@ class Peer:
         )
 
     def _permit(self, t: int) -> None:
-        if t in self.permitted or self.s.status[t] != TaskState.DISPATCHED:
+        if t in self.permitted or self.status[t] != TaskState.DISPATCHED:
             return
         if not self._startable(t):
             return
@@ -245,7 +257,7 @@ class Peer:
     # ------------------------------------------------------------ task ends
     def task_done(self, t: int) -> None:
         """The controller ended task ``t``'s trajectory."""
-        self.s.set_status(t, TaskState.DONE)
+        self.set_status(t, TaskState.DONE)
         self.busy = False
         self._learn_done(t)
         self._tell_successors(Notice(t, "done"))
@@ -254,15 +266,15 @@ class Peer:
     def task_failed(self, t: int, cause: str, kind: str) -> None:
         """Own task ``t`` failed (ran and failed, or can never run)."""
         s = self.s
-        st = s.status[t]
+        st = self.status[t]
         if st in (TaskState.DONE, TaskState.FAILED):
             return
         if st == TaskState.DISPATCHED:
             self._withdraw(t)
         if st == TaskState.RUNNING:
             self.busy = False
-        s.set_status(t, TaskState.FAILED)
-        s.cause[t], s.cause_kind[t] = cause, kind
+        self.set_status(t, TaskState.FAILED)
+        self.cause[t] = (cause, kind)
         s.trace.add(
             s.kernel.now,
             "task_failed",
@@ -294,15 +306,15 @@ class Peer:
         s = self.s
         if self.a in s.failed_arms:
             return  # its station is silent; the harness reports its tasks
-        if s.status[t] in (TaskState.DONE, TaskState.RUNNING, TaskState.FAILED):
+        if self.status[t] in (TaskState.DONE, TaskState.RUNNING, TaskState.FAILED):
             return
         self.release[t] = max(self.release[t], arrival)
         if math.isinf(arrival):
             self.task_failed(t, f"part {part!r} never arrived", "part_missing")
             return
-        if s.status[t] == TaskState.DISPATCHED and t in self.permitted:
+        if self.status[t] == TaskState.DISPATCHED and t in self.permitted:
             self._withdraw(t)
-            s.set_status(t, TaskState.PENDING)
+            self.set_status(t, TaskState.PENDING)
         s.kernel.schedule(arrival, self._on_release, t, absolute=True)
 
     # ------------------------------------------------------------ controller
@@ -311,7 +323,7 @@ class Peer:
         s = self.s
         if kind == "zone_request":
             t = int(payload.task)
-            if t >= 0 and s.status[t] not in (TaskState.DISPATCHED, TaskState.RUNNING):
+            if t >= 0 and self.status[t] not in (TaskState.DISPATCHED, TaskState.RUNNING):
                 return  # sent before the controller heard of the withdrawal
             self._request(payload)
         elif kind == "zone_release":
@@ -321,8 +333,8 @@ class Peer:
                 self.task_failed(payload.task, payload.cause, "insertion")
             elif payload.outcome == "withdrawn":  # a withdrawn trajectory
                 self.busy = False
-                if s.status[payload.task] == TaskState.DISPATCHED:
-                    s.set_status(payload.task, TaskState.PENDING)
+                if self.status[payload.task] == TaskState.DISPATCHED:
+                    self.set_status(payload.task, TaskState.PENDING)
                 self.dispatch_next()
             else:
                 self.task_done(payload.task)
@@ -436,8 +448,8 @@ class Peer:
             self.dispatch_h.cancel()
             self.dispatch_h = None
         for t in self.tasks:
-            if s.status[t] in (TaskState.DISPATCHED, TaskState.RUNNING):
-                s.set_status(t, TaskState.PENDING)
+            if self.status[t] in (TaskState.DISPATCHED, TaskState.RUNNING):
+                self.set_status(t, TaskState.PENDING)
                 s.trace.add(
                     s.kernel.now,
                     "task_failed",
@@ -463,7 +475,7 @@ class Peer:
         for k, waits in self.deferred.items():
             self.deferred[k] = [(x, i) for x, i in waits if x != b]
         for t in self.tasks:
-            if s.status[t] in (TaskState.DONE, TaskState.FAILED, TaskState.RUNNING):
+            if self.status[t] in (TaskState.DONE, TaskState.FAILED, TaskState.RUNNING):
                 continue
             lost = [
                 q for q in s.p.task_preds[t] if q not in self.done and arm_of(s.p, s.plan, q) == b

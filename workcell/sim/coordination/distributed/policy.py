@@ -4,13 +4,25 @@
 arm's station and routes the frames of that station: peer records
 (:mod:`workcell.sim.protocol.peers`) to the peer, the controller's own
 messages and reports to the peer without the medium (they share the
-station). It holds no decision and no view of the arms of its own: it
-publishes what the harness reads (each task's state and cause, written by
-the peer of the task's arm; each arm's view and geometric hold, as its own
-peer has them) and hands each fault to the peer where it happens. The
-geometric check (S2.12) is each peer's (:mod:`.sight`): its own view of
-the arms, from frames, and a request/reply round among the arms that may
-meet before every departure.
+station). It holds no decision, no record and no view of the arms of its
+own: what the harness reads at the end of a run it reads from the peers'
+own records (each task's state and cause from the peer of the task's arm,
+each arm's view and geometric hold from its own peer), and it hands each
+fault to the peer where it happens. The geometric check (S2.12) is each
+peer's (:mod:`.sight`): its own view of the arms, from frames, its own
+:class:`~workcell.sim.coordination.guard.GeometryGuard` (the cell's
+geometry, which every station holds, with caches of its own), and a
+request/reply round among the arms that may meet before every departure.
+
+**What the peers share** is the event loop (the simulation itself: the
+clock every station reads, the medium's deliveries) and, read only, what
+every station derives once from the cell and the plan it holds (the
+resources' plan orders, :func:`~.plan.resource_orders`; the arms that may
+meet, :func:`~.reach.may_meet`): computed once here and handed to every
+peer, never written after. Nothing one peer writes is read by another;
+the trace is the harness's recorder, written by every station and read by
+none, and the failed arms are the fault injection's record, of which a
+peer reads only whether its own arm is in it (its station's power).
 
 Faults under this policy:
 
@@ -70,7 +82,7 @@ from workcell.sim.protocol.exchange import (
 )
 from workcell.sim.protocol.messages import LateNotice, Piece
 from workcell.sim.protocol.peers import PEER_RECORDS, Activation, Alarm, Resource
-from workcell.sim.protocol.states import TASK_MACHINE, TaskState
+from workcell.sim.protocol.states import TaskState
 
 __all__ = ["DistributedPolicy"]
 
@@ -128,9 +140,6 @@ class DistributedPolicy:
         del resolve_evaluations, resolving
         p = self.p
         T, A = p.n_tasks, p.n_arms
-        self.status: list[TaskState] = [TaskState.PENDING] * T
-        self.cause = [""] * T
-        self.cause_kind = [""] * T
         self.plans: list[Schedule] = [plan]
         self.plan_of: list[int] = [0] * T
         self.dropped: frozenset[int] = frozenset()
@@ -149,29 +158,33 @@ class DistributedPolicy:
             for a in range(A)
         ]
         self._stop_ids = itertools.count(1)
-        self.guard = (
-            GeometryGuard(compiled, clock=lambda: kernel.now, answer=guard_answer)
-            if geometry
-            else None
-        )
-        """The geometric check: the cell's geometry, which every station
-        holds (its caches are keyed by trajectory, it keeps nothing of the
-        arms' state; each peer asks it with its own view)."""
         self.max_stalled = 200
         self.recheck_limit = 8 + 4 * A
         self.max_backoffs = 2 * T + 2
         self.detour_checks = int(detour_checks)
         """Work limit of one OMPL detour search (validity checks)."""
         self.detours_on = bool(detours)
-        self.near: list[frozenset[int]] = (
-            may_meet(compiled) if self.guard is not None else [frozenset()] * A
-        )
+        self.near: list[frozenset[int]] = may_meet(compiled) if geometry else [frozenset()] * A
         """Per arm, the arms that may meet it (:func:`~.reach.may_meet`):
         the only peers it tells where it is and asks before it sets off."""
         self.peers: list[Peer] = [
-            Peer(self, a, self._local(a), Sight(self, a, self.guard, self.near[a]))
+            Peer(
+                self,
+                a,
+                self._local(a),
+                Sight(
+                    self,
+                    a,
+                    # each station's own geometric check, with its own caches
+                    GeometryGuard(compiled, clock=lambda: kernel.now, answer=guard_answer)
+                    if geometry
+                    else None,
+                    self.near[a],
+                ),
+            )
             for a in range(A)
         ]
+        self._arm_of = [arm_of(p, plan, t) for t in range(T)]
         net.receivers[0] = self._from_controller
         channel.attach_coordination(self.on_report, self.controller_message, self._at_station)
 
@@ -181,6 +194,23 @@ class DistributedPolicy:
         """Per arm, its view as its own peer has it (the harness reads it
         at the end of a run; no peer reads another's)."""
         return [peer.sight.view[peer.a] for peer in self.peers]
+
+    @property
+    def status(self) -> list[TaskState]:
+        """Per task, its state as the peer of its arm records it (each peer
+        publishes the records of its own tasks; the harness reads them at
+        the end of a run, no peer reads another's)."""
+        return [self.peers[a].status[t] for t, a in enumerate(self._arm_of)]
+
+    @property
+    def cause(self) -> list[str]:
+        """Per task, why it failed ("" if it did not), from its peer's record."""
+        return [self.peers[a].cause.get(t, ("", ""))[0] for t, a in enumerate(self._arm_of)]
+
+    @property
+    def cause_kind(self) -> list[str]:
+        """Per task, the category of :attr:`cause`, from its peer's record."""
+        return [self.peers[a].cause.get(t, ("", ""))[1] for t, a in enumerate(self._arm_of)]
 
     @property
     def geo_held(self) -> dict[int, list[int]]:
@@ -205,17 +235,8 @@ class DistributedPolicy:
 
     def done_for_good(self, a: int) -> bool:
         """Every task the plan gives arm ``a`` is done or failed (asked by
-        ``a``'s own peer, of its own tasks' records only)."""
-        return all(
-            self.status[t] in (TaskState.DONE, TaskState.FAILED)
-            for t in range(self.p.n_tasks)
-            if arm_of(self.p, self.plan, t) == a
-        )
-
-    def set_status(self, t: int, new: TaskState) -> None:
-        """Move task ``t`` to ``new`` (checked against the task machine)."""
-        TASK_MACHINE.check(self.status[t], new)
-        self.status[t] = new
+        ``a``'s own station: its peer's records)."""
+        return self.peers[a].done_for_good()
 
     def _local(self, a: int) -> Any:
         def deliver(kind: str, payload: Any) -> None:
@@ -270,7 +291,7 @@ class DistributedPolicy:
 
     def task_started(self, a: int, t: int, now: float) -> None:
         """Notice: arm ``a`` left task ``t``'s start station."""
-        self.set_status(t, TaskState.RUNNING)
+        self.peers[a].set_status(t, TaskState.RUNNING)
         self.peers[a].sight.stalled = 0
         self.trace.add(now, "task_start", arm=self.p.arm_names[a], task=self.p.task_names[t])
 

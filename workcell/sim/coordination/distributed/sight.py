@@ -16,6 +16,9 @@ frames it takes on the medium; nothing is shared between peers.
   meet its own does not read it. The answers stay point to point. On the
   serial star, whose hub relays a broadcast on every line, one frame goes
   to each arm.
+* **Its own check.** Each peer has its own
+  :class:`~workcell.sim.coordination.guard.GeometryGuard` (built from the
+  compiled cell every station holds; its caches are its own).
 * **Its own view.** :class:`Sight` keeps one
   :class:`~workcell.sim.protocol.exchange.ArmView` per arm: its own arm's
   from its controller's reports at the station, the others' from the
