@@ -67,6 +67,7 @@ from workcell.sim.coordination import geometric, recovery, resources
 from workcell.sim.coordination.constants import CAUSE_KINDS
 from workcell.sim.coordination.distributed.plan import PieceUse, build_legs, task_pieces
 from workcell.sim.coordination.guard import GeometryGuard
+from workcell.sim.coordination.throttle import Throttle
 from workcell.sim.events.loop import EventLoop, Handle
 from workcell.sim.events.trace import Trace
 from workcell.sim.protocol.channel import ControlChannel
@@ -223,17 +224,21 @@ class Coordinator:
             else None
         )
         self.geo_held: dict[int, list[int]] = {}
-        self._recheck_h: Handle | None = None
         self.backoffs = 0
         self.max_backoffs = 2 * self.p.n_tasks + 2
         self.detour_tried: set[tuple[int, int, int]] = set()
-        self._recheck_at = -math.inf
-        self._recheck_n = 0
         self.recheck_limit = 8 + 4 * A
         """Passes of the geometric recheck at one instant before the next waits."""
-        self.stalled = 0
-        """Deferred rechecks since a task last started or ended."""
         self.max_stalled = 200
+        self.recheck = Throttle(
+            kernel,
+            self._recheck,
+            limit=self.recheck_limit,
+            max_stalled=self.max_stalled,
+            period=self.guard.dt if self.guard is not None else 0.01,
+        )
+        """The geometric recheck's throttle (its ``stalled``: deferred
+        rechecks since a task last started or ended)."""
         self.detour_planning = bool(detours)
         """Plan S2.12 alternative trajectories (off: an ablation)."""
         self.detour_checks = int(detour_checks)
@@ -393,7 +398,7 @@ class Coordinator:
 
     def task_started(self, a: int, t: int, now: float) -> None:
         self.set_status(t, TaskState.RUNNING)
-        self.stalled = 0
+        self.recheck.progress()
         self.trace.add(now, "task_start", arm=self.p.arm_names[a], task=self.p.task_names[t])
 
     def task_ended(self, a: int, t: int, now: float) -> None:
@@ -405,7 +410,7 @@ class Coordinator:
 
     def _task_done(self, a: int, t: int) -> None:
         self.set_status(t, TaskState.DONE)
-        self.stalled = 0
+        self.recheck.progress()
         self.arm_busy[a] = False
         if self.zone_checks and self.zm.waiting(a) is None and self.zm.is_moving(a):
             self._events(self.zm.stop(a).events)
@@ -427,7 +432,7 @@ class Coordinator:
         self.set_status(t, TaskState.FAILED)
         self.cause[t] = cause
         self.cause_kind[t] = "insertion"
-        self.stalled = 0
+        self.recheck.progress()
         self.arm_busy[a] = False
         self.trace.add(now, "task_failed", arm=p.arm_names[a], task=p.task_names[t], detail=cause)
         if self.zone_checks and self.zm.waiting(a) is None and self.zm.is_moving(a):

@@ -266,26 +266,14 @@ def done_for_good(self: _Self, b: int) -> bool:
 
 
 def arm_moved(self: _Self) -> None:
-    """Look at the geometric stops again (after something moved or stopped).
-
-    Progress is guaranteed: at most ``recheck_limit`` passes run at one
-    instant; after that the next pass comes one guard period later (the
-    kernel's time advances), and after ``max_stalled`` such deferred
-    passes with no task starting or ending the arms still stopped stay
-    stopped (an unresolved geometric deadlock, reported per task)."""
-    if self._recheck_h is not None:
-        return
-    now = self.kernel.now
-    if now != self._recheck_at:
-        self._recheck_at, self._recheck_n = now, 0
-    self._recheck_n += 1
-    delay = 0.0
-    if self._recheck_n > self.recheck_limit:
-        if self.stalled >= self.max_stalled:
-            return
-        self.stalled += 1
-        delay = self.guard.dt if self.guard is not None else 0.01
-    self._recheck_h = self.kernel.schedule(delay, self._recheck, priority=1)
+    """Look at the geometric stops again (after something moved or stopped),
+    throttled by the coordinator's :class:`~workcell.sim.coordination.
+    throttle.Throttle` (``self.recheck``): at most ``recheck_limit`` passes
+    at one instant, then one guard period later, and after ``max_stalled``
+    such deferred passes with no task starting or ending the arms still
+    stopped stay stopped (an unresolved geometric deadlock, reported per
+    task)."""
+    self.recheck.poke()
 
 
 def _recheck(self: _Self) -> None:
@@ -294,7 +282,6 @@ def _recheck(self: _Self) -> None:
     (:class:`~workcell.sim.protocol.exchange.ReleaseHold`: it asks again
     before it sets off); else an alternative trajectory, a back-off of the
     arms in its way, or a promotion (S2.6)."""
-    self._recheck_h = None
     for a in range(self.p.n_arms):
         ctl = self.book[a]
         if ctl.failed:

@@ -292,12 +292,12 @@ class DistributedPolicy:
     def task_started(self, a: int, t: int, now: float) -> None:
         """Notice: arm ``a`` left task ``t``'s start station."""
         self.peers[a].set_status(t, TaskState.RUNNING)
-        self.peers[a].sight.stalled = 0
+        self.peers[a].sight.looks.progress()
         self.trace.add(now, "task_start", arm=self.p.arm_names[a], task=self.p.task_names[t])
 
     def task_ended(self, a: int, t: int, now: float) -> None:
         """Notice: arm ``a`` ended task ``t``'s trajectory."""
-        self.peers[a].sight.stalled = 0
+        self.peers[a].sight.looks.progress()
         self.trace.add(now, "task_end", arm=self.p.arm_names[a], task=self.p.task_names[t])
 
     def arm_failed(self, a: int) -> None:

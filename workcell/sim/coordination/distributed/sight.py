@@ -101,6 +101,7 @@ import numpy as np
 from workcell.geometry import ObstacleSet, plan_detour
 from workcell.sim.comms.medium import BROADCAST
 from workcell.sim.coordination.geometric import initial_book
+from workcell.sim.coordination.throttle import Throttle
 from workcell.sim.protocol.exchange import (
     ArmView,
     BackOff,
@@ -122,7 +123,7 @@ if TYPE_CHECKING:
     from workcell.compile import CompiledCell
     from workcell.sim.comms.link import Link
     from workcell.sim.coordination.guard import GeometryGuard
-    from workcell.sim.events.loop import EventLoop, Handle
+    from workcell.sim.events.loop import EventLoop
     from workcell.sim.events.trace import Trace
     from workcell.sim.protocol.channel import ControlChannel
 
@@ -208,10 +209,15 @@ class Sight:
         self.rounds = 0
         self.detour_tried: set[tuple[int, int]] = set()
         self.backoff_asked: set[tuple[int, int, int, int]] = set()
-        self.stalled = 0
-        self._look_h: Handle | None = None
-        self._look_at = -1.0
-        self._look_n = 0
+        self.looks = Throttle(
+            host.kernel,
+            self._look,
+            limit=host.recheck_limit,
+            max_stalled=host.max_stalled,
+            period=guard.dt if guard is not None else 0.01,
+        )
+        """The throttle of the look again at the own arm's hold (its
+        ``stalled``: deferred looks since the own arm's last task start or end)."""
 
     # ------------------------------------------------------------ sending
     def _send(self, b: int, kind: str, payload: Any) -> None:
@@ -374,7 +380,7 @@ class Sight:
                 or old.waiting != view.waiting
             )
             if old.leg is not view.leg:
-                self.stalled = 0
+                self.looks.progress()
         res = self.reserved.get(b)
         if res and not view.running:
             # sent after that request was decided, standing: those motions are over
@@ -409,26 +415,13 @@ class Sight:
 
     # ------------------------------------------------------------ watch and notify
     def _notify(self) -> None:
-        """Look at the own arm's hold and back-off again (at most
+        """Look at the own arm's hold and back-off again (throttled: at most
         ``recheck_limit`` looks at one instant, then one guard period later,
-        at most ``max_stalled`` times with no progress in sight)."""
-        if self._look_h is not None:
-            return
-        h = self.h
-        now = h.kernel.now
-        if now != self._look_at:
-            self._look_at, self._look_n = now, 0
-        self._look_n += 1
-        delay = 0.0
-        if self._look_n > h.recheck_limit:
-            if self.stalled >= h.max_stalled:
-                return
-            self.stalled += 1
-            delay = self.guard.dt if self.guard is not None else 0.01
-        self._look_h = h.kernel.schedule(delay, self._look, priority=1)
+        at most ``max_stalled`` times with no progress in sight;
+        :class:`~workcell.sim.coordination.throttle.Throttle`)."""
+        self.looks.poke()
 
     def _look(self) -> None:
-        self._look_h = None
         h, a = self.h, self.a
         own = self.view[a]
         if own.failed:
