@@ -123,7 +123,9 @@ def table(m: Any) -> str:
         "medium; only the peers' requests and replies for resources shared with other arms, "
         "task-end notices to the successors' arms, broadcast emergency stops, and the S2.12 "
         "check among the arms that may meet (each arm's view whenever it changes, and a "
-        "departure request and its answers before every motion) do. Zone wait: "
+        "departure request and its answers before every motion; the view and the request "
+        "are one broadcast frame on a medium whose broadcast is one transfer, every medium "
+        "here but serial-star) do. Zone wait: "
         "seconds the arms stood at zone borders, summed over the arms. Every number is a count "
         "of simulated events (deterministic for the seed), not a timing.",
     ]
