@@ -73,7 +73,11 @@ frames it takes on the medium; nothing is shared between peers.
   motions can meet the asked one) is not sound either: a detour (an OMPL
   path anywhere within the joint limits) and a back-off to the home joints
   leave the planned motions, so only the workspace bound of
-  :func:`~.reach.may_meet` holds for every motion an arm can make.
+  :func:`~.reach.may_meet` holds for every motion an arm can make. Asking
+  only the arms whose workspace ball meets the box of the asked motion
+  would be sound, but on the built-in cells it asks the same arms: every
+  task trajectory's box meets every other arm's ball on ``cell8``,
+  ``scara4`` and ``urdf_cell``.
 * **Held arms** are looked at again when a frame says another arm started,
   stopped or failed, or a reservation ended (watch and notify): a clear
   way ends the hold (the controller asks again, a new round), else the
