@@ -29,6 +29,7 @@ the scale problems only, tree at 1 s, into a temporary directory).
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import time
 from typing import Any
@@ -183,6 +184,78 @@ def bottlenecks(p: Any, s: Any, top: int = 5) -> list[dict[str, Any]]:
     return out
 
 
+def bottleneck_timeline(p: Any, s: Any, resource: int) -> dict[str, float]:
+    """How a plan spends its makespan on one resource (seconds; they add up to it).
+
+    ``before first use`` and ``after last use``; ``least work``: the least
+    occupation of each use in the plan's modes (merged window lengths; a
+    tool: the mode); ``waits inside``: the plan's uses beyond that (waits at
+    borders inside windows, detours); ``idle, a user ready``: gaps between
+    uses while some task that uses it later had its release and predecessors
+    behind it (only its arm, or the plan's order, kept it out);
+    ``idle, none ready``: the other gaps. ``mode excess`` (not a share of
+    the makespan): the plan's least work less the least work over each
+    task's modes.
+    """
+    from scheduler.timing import merge_intervals
+
+    Z = p.n_zones
+    ms = float(np.max(s.end))
+    uses: dict[int, list[tuple[float, float]]] = {}
+    for t in range(p.n_tasks):
+        m = int(s.mode[t])
+        sh = p.shapes[m]
+        if resource >= 2 * Z:
+            if resource in sh.tools:
+                uses[t] = [(float(s.start[t]), float(s.end[t]))]
+            continue
+        ivs = [(a, b) for r, a, b in sh.intervals(float(s.start[t]), s.waits[t]) if r == resource]
+        if ivs:
+            uses[t] = ivs
+    if not uses:
+        return {}
+    least = 0.0
+    excess = 0.0
+    for t in uses:
+        lengths = [_least(p, int(m), resource) for m in p.task_modes[t]]
+        mine = _least(p, int(s.mode[t]), resource)
+        least += mine
+        excess += mine - min(x for x in lengths if x is not None) if None not in lengths else 0.0
+    merged = merge_intervals([iv for ivs in uses.values() for iv in ivs])
+    busy = sum(b - a for a, b in merged)
+    first_use = {t: min(a for a, _ in ivs) for t, ivs in uses.items()}
+    ready = {
+        t: max([float(p.task_release[t])] + [float(s.end[q]) for q in p.task_preds[t]])
+        for t in uses
+    }
+    idle_ready = idle_none = 0.0
+    for (_, g0), (g1, _) in itertools.pairwise(merged):
+        if g1 <= g0:
+            continue
+        if any(first_use[t] >= g1 - TOL and ready[t] <= g0 + TOL for t in uses):
+            idle_ready += g1 - g0
+        else:
+            idle_none += g1 - g0
+    return {
+        "before first use": merged[0][0],
+        "least work": least,
+        "waits inside": busy - least,
+        "idle, a user ready": idle_ready,
+        "idle, none ready": idle_none,
+        "after last use": ms - merged[-1][1],
+        "mode excess": excess,
+    }
+
+
+def _least(p: Any, m: int, resource: int) -> float | None:
+    """The least occupation of ``resource`` by mode ``m`` (None: it does not use it)."""
+    sh = p.shapes[m]
+    if resource >= 2 * p.n_zones:
+        return float(sh.duration) if resource in sh.tools else None
+    got = [b - a for r, a, b in (*sh.exclusive, *sh.moves) if r == resource]
+    return float(sum(got)) if got else None
+
+
 def _problems(quick: bool) -> list[tuple[str, Any]]:
     from scheduler.generate import random_problem
 
@@ -214,7 +287,7 @@ def main(argv: list[str] | None = None) -> None:
     tl = args.time_limit if args.time_limit is not None else (1.0 if args.quick else 10.0)
     out = output_dir(args.quick)
     records = []
-    arm_lines, chain_lines, res_lines, bound_lines = [], [], [], []
+    arm_lines, chain_lines, res_lines, bound_lines, time_lines = [], [], [], [], []
     for name, p in _problems(args.quick):
         seed = int(name.rsplit("-s", 1)[1]) if "-s" in name else 0
         res = solve(p, "tree", time_limit=tl, seed=seed)
@@ -247,6 +320,16 @@ def main(argv: list[str] | None = None) -> None:
         bn = bottlenecks(p, res.schedule)
         for b in bn:
             res_lines.append(f"| {name} | " + " | ".join(str(v) for v in b.values()) + " |")
+        from scheduler.bounds import resource_bounds
+
+        top = max(resource_bounds(p), key=lambda r: r.bound, default=None)
+        tl_row = {} if top is None else bottleneck_timeline(p, res.schedule, top.resource)
+        if top is not None and tl_row:
+            time_lines.append(
+                f"| {name} | {top.kind} {top.name} | {top.bound:.1f} | {ms:.1f} | "
+                + " | ".join(f"{v:.1f}" for v in tl_row.values())
+                + " |"
+            )
         best = lb.value
         bound_lines.append(
             f"| {name} | {ms:.1f} | {lb.critical_path:.1f} | {lb.load:.1f} | "
@@ -262,6 +345,7 @@ def main(argv: list[str] | None = None) -> None:
                 "chain": ch,
                 "hops": hp,
                 "bottlenecks": bn,
+                "bottleneck_timeline": tl_row,
                 "bounds": {
                     k: getattr(lb, k)
                     for k in (
@@ -317,6 +401,22 @@ def main(argv: list[str] | None = None) -> None:
             "|---|---|---|---|---|---|---|",
             *res_lines,
             "",
+            "## The busiest resource's timeline in the plan (seconds)",
+            "",
+            "The resource with the largest one-machine bound. Before first use + least "
+            "work + waits inside + idle + after last use = makespan. Least work: each use "
+            "at its mode's least occupation; waits inside: the plan's uses beyond that; "
+            "idle, a user ready: gaps while a task that enters it later had its release "
+            "and predecessors behind it (only its arm or the plan's order kept it out); "
+            "mode excess: the least work of the plan's modes less the least over each "
+            "task's modes.",
+            "",
+            "| problem | resource | one-machine bound | makespan | before first use | least work "
+            "| waits inside | idle, a user ready | idle, none ready | after last use "
+            "| mode excess |",
+            "|---|---|---|---|---|---|---|---|---|---|---|",
+            *time_lines,
+            "",
             "## Lower bounds (scheduler.lower_bounds)",
             "",
             "| problem | plan | critical path | load LP | capability | resources (head-body-tail) "
@@ -326,7 +426,8 @@ def main(argv: list[str] | None = None) -> None:
             "",
         ]
     )
-    path = write("gap_anatomy", {"time_limit": tl, "problems": records}, table, out)
+    seeds = [int(str(r["problem"]).rsplit("-s", 1)[1]) for r in records if "-s" in r["problem"]]
+    path = write("gap_anatomy", {"time_limit": tl, "seeds": seeds, "problems": records}, table, out)
     print(f"wrote {path}")
     _ = math
 
