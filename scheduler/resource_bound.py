@@ -14,15 +14,19 @@ window in them, and lets an arm wait anywhere:
 * each merged window ``(s, e)`` of a kept resource in the chosen mode is an
   interval of length ``e - s`` that starts no earlier than ``S + s`` and
   ends no later than ``E - (duration - e)``, and the windows of one mode keep
-  their order (each starts at least ``s2 - s1`` after the one before);
+  their order (each starts at least ``s2 - s1`` after the one before); a
+  move window in a shared zone is cut at the mode's borders inside it, one
+  interval per stretch (an arm that waits there stands still, and another
+  may move in the zone meanwhile);
 * no two intervals of one kept resource overlap (for shared zones: their
   move windows).
 
 **Valid for every schedule** :func:`scheduler.validate` **accepts.** A real
-use of a window starts at ``S + s`` plus the waits before it, lasts ``e - s``
-plus the waits inside it, and ends ``duration - e`` plus later waits and
-detours before the task's end, so its first ``e - s`` seconds are such an
-interval; uses of a resource by different arms never overlap and one arm
+use of an exclusive zone's window starts at ``S + s`` plus the waits before
+it, lasts ``e - s`` plus the waits inside it, and ends ``duration - e`` plus
+later waits and detours before the task's end, so its first ``e - s``
+seconds are such an interval; a real move between two borders is one
+stretch of exactly its length (waits happen only at borders); uses of a resource by different arms never overlap and one arm
 does one task at a time; the resources left out and the start zones only
 remove schedules. Times map to ``floor(x / unit)`` and every length,
 offset, duration, travel and release is rounded down (``floor(a + b) >=
@@ -166,10 +170,13 @@ def busy_resources_model(
     per_res: dict[int, list[Any]] = {}
     per_mode: dict[int, list[tuple[float, Any]]] = {}
     n_windows = 0
+    Z = p.n_zones
     for r, modes in resource_windows(p, frozenset(resources)).items():
         for m, ws in modes.items():
             t = int(p.mode_task[m])
             d = float(p.mode_duration[m])
+            if r >= Z:  # movement: an arm standing at a border inside does not move
+                ws = _split(ws, p.shapes[m].borders)
             for s, e in ws:
                 y = mdl.new_int_var(0, H, "")
                 length = fl(e - s)
@@ -192,6 +199,21 @@ def busy_resources_model(
     mdl.add_max_equality(mk, E)
     mdl.minimize(mk)
     return mdl, {"S": S, "E": E, "X": X, "makespan": mk, "scale": scale, "windows": n_windows}
+
+
+def _split(
+    windows: list[tuple[float, float]], borders: tuple[float, ...]
+) -> list[tuple[float, float]]:
+    """Cut windows at the borders strictly inside them (where an arm may wait).
+
+    >>> _split([(0.0, 4.0), (5.0, 6.0)], (2.0, 5.0))
+    [(0.0, 2.0), (2.0, 4.0), (5.0, 6.0)]
+    """
+    out = []
+    for s, e in windows:
+        cuts = [b for b in borders if s < b < e]
+        out += list(itertools.pairwise([s, *cuts, e]))
+    return out
 
 
 def busy_resources_bound(

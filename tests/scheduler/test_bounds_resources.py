@@ -14,9 +14,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from scheduler import lower_bound, solve, validate
+from scheduler import Model, Problem, Schedule, Window, lower_bound, solve, validate
 from scheduler.generate import random_problem
-from scheduler.resource_bound import busiest_resources, busy_resources_bound
+from scheduler.resource_bound import busiest_resources, busy_resources_bound, busy_resources_model
 
 
 @settings(max_examples=20, deadline=None)
@@ -62,3 +62,51 @@ def test_sees_what_one_resource_at_a_time_does_not() -> None:
     bound, status = busy_resources_bound(p, 20, workers=1)
     assert status == "OPTIMAL"
     assert lower_bound(p) + 3.0 <= bound <= opt.objective + 1e-6
+
+
+def _image_is_a_solution(p: Problem, s: Schedule, k: int, unit: float) -> bool:
+    """Fix the relaxation's starts, ends and modes to a valid schedule's (rounded down):
+    CP-SAT must find the windows a place."""
+    import math
+
+    from ortools.sat.python import cp_model
+
+    mdl, v = busy_resources_model(p, float(s.end.max()), busiest_resources(p, k), unit)
+    for t in range(p.n_tasks):
+        mdl.add(v["S"][t] == math.floor(float(s.start[t]) / unit + 1e-9))
+        mdl.add(v["E"][t] == math.floor(float(s.end[t]) / unit + 1e-9))
+        mdl.add(v["X"][int(s.mode[t])] == 1)
+    solver = cp_model.CpSolver()
+    solver.parameters.num_workers = 1
+    solver.parameters.max_time_in_seconds = 30
+    return solver.solve(mdl) in (cp_model.OPTIMAL, cp_model.FEASIBLE)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_every_plan_with_waits_is_a_solution(seed: int) -> None:
+    """The image of a valid schedule that waits at borders (inside windows, also
+    inside a shared zone's move window, where the arm stands still and another
+    may move) is a solution of the relaxation."""
+    p = random_problem(3, 12, 2, 1, seed=seed, zone_fraction=1.0, setups=False)
+    s = solve(p, "greedy", seed=seed).schedule
+    assert s is not None and validate(p, s) > 0
+    assert _image_is_a_solution(p, s, 4, 0.01)
+
+
+def test_a_wait_inside_a_move_window_lets_another_arm_move() -> None:
+    """Regression: arm a moves in shared zone z during [0, 4] of its task and stands
+    still 10 s at the border at 2 (zone y starts there) while arm b moves in z
+    for 10 s. Valid (a standing arm does not move); its image must be a solution
+    (a move window is one interval per stretch between borders, not one)."""
+    m = Model()
+    a, b = m.add_arm("a"), m.add_arm("b")
+    z, y = m.add_zone("z", "shared"), m.add_zone("y")
+    ta, tb = m.add_task("ta"), m.add_task("tb")
+    m.add_mode(
+        ta, a, 4.0, windows=[Window(z, 0.0, 4.0), Window(z, 0.0, 4.0, "move"), Window(y, 2.0, 3.0)]
+    )
+    m.add_mode(tb, b, 10.0, windows=[Window(z, 0.0, 10.0), Window(z, 0.0, 10.0, "move")])
+    p = m.build()
+    s = Schedule.from_starts(p, [0, 1], [0.0, 2.0], waits=[[10.0], []])
+    assert validate(p, s) == 14.0
+    assert _image_is_a_solution(p, s, 4, 0.01)
