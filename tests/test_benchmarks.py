@@ -38,6 +38,7 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_urdf",
         "bench_policies",
         "gap_anatomy",
+        "bench_bounds",
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
