@@ -52,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from multiarm.errors import UsageError
 from scheduler.cpsat import (
     add_arm_sequences,
     cpsat_bound,
@@ -255,10 +256,19 @@ def busy_resources_bound(
     (float, str)
         The bound (seconds; 0 when CP-SAT proved nothing) and CP-SAT's status
         name (``"OPTIMAL"``: the relaxation is solved).
+
+    Raises
+    ------
+    UsageError
+        ``k`` is not an integer ``>= 0`` or ``unit`` not a number ``> 0``.
     """
     from ortools.sat.python import cp_model
 
     p = problem
+    if isinstance(k, bool) or not isinstance(k, int) or k < 0:
+        raise UsageError(f"busy_resources_bound: k must be an integer >= 0, got {k!r}")
+    if not (isinstance(unit, int | float) and math.isfinite(unit) and unit > 0):
+        raise UsageError(f"busy_resources_bound: unit must be a number > 0 (seconds), got {unit!r}")
     if p.n_tasks == 0:
         return 0.0, "OPTIMAL"
     if horizon is None:

@@ -110,3 +110,12 @@ def test_a_wait_inside_a_move_window_lets_another_arm_move() -> None:
     s = Schedule.from_starts(p, [0, 1], [0.0, 2.0], waits=[[10.0], []])
     assert validate(p, s) == 14.0
     assert _image_is_a_solution(p, s, 4, 0.01)
+
+
+@pytest.mark.parametrize(("k", "unit"), [(-1, 0.01), (2.5, 0.01), (2, 0.0), (2, float("nan"))])
+def test_bad_arguments_name_themselves(k: object, unit: object) -> None:
+    from multiarm.errors import UsageError
+
+    p = random_problem(2, 4, 2, 1, seed=0)
+    with pytest.raises(UsageError, match="k must be" if unit == 0.01 else "unit must be"):
+        busy_resources_bound(p, 1, k=k, unit=unit, workers=1)  # type: ignore[arg-type]
