@@ -39,7 +39,7 @@ Examples
 >>> from scheduler.generate import random_problem
 >>> from scheduler.bounds import lower_bound
 >>> p = random_problem(3, 8, 2, 1, seed=4, zone_fraction=1.0)
->>> b, status = busy_resources_bound(p, 5, workers=1)
+>>> b, status = busy_resources_bound(p, None, workers=1)  # no time limit: solved
 >>> status, b >= lower_bound(p) - 1e-6
 ('OPTIMAL', True)
 """
