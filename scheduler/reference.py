@@ -72,6 +72,7 @@ from scheduler.cpsat import (
 )
 from scheduler.overlap import overlap_bound
 from scheduler.problem import Problem
+from scheduler.resource_bound import busy_resources_bound
 from scheduler.schedule import Schedule, validate
 from scheduler.search import Evaluator, priority_order
 
@@ -605,11 +606,12 @@ def best_bound(
     """The best lower bound of the makespan we can prove (seconds).
 
     The largest of :func:`scheduler.bounds.lower_bound` (no solver),
-    :func:`relaxation_bound` (zone-free) and
-    :func:`scheduler.overlap.overlap_bound` (pair spans), each relaxation
-    given ``time_limit`` seconds (or ``max_deterministic_time``) of CP-SAT.
-    All three are bounds of the true problem: waits at borders and detours
-    included.
+    :func:`relaxation_bound` (zone-free),
+    :func:`scheduler.overlap.overlap_bound` (pair spans) and
+    :func:`scheduler.resource_bound.busy_resources_bound` (the busiest zones
+    kept, waits anywhere), each relaxation given ``time_limit`` seconds (or
+    ``max_deterministic_time``) of CP-SAT. All four are bounds of the true
+    problem: waits at borders and detours included.
 
     Examples
     --------
@@ -628,7 +630,10 @@ def best_bound(
     ob, _ = overlap_bound(
         p, time_limit, seed, workers=workers, max_deterministic_time=max_deterministic_time
     )
-    return max(lb, zf, ob)
+    rb, _ = busy_resources_bound(
+        p, time_limit, seed, workers=workers, max_deterministic_time=max_deterministic_time
+    )
+    return max(lb, zf, ob, rb)
 
 
 def solve_reference(

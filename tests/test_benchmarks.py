@@ -37,6 +37,8 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_grid",
         "bench_urdf",
         "bench_policies",
+        "gap_anatomy",
+        "bench_bounds",
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
