@@ -61,6 +61,7 @@ __all__ = [
     "jackson_preemptive",
     "lower_bound",
     "lower_bounds",
+    "min_incoming_setup",
     "mode_heads",
     "resource_bounds",
 ]
@@ -85,8 +86,13 @@ class LowerBounds:
     one_machine_name: str = ""
 
 
-def _min_incoming_setup(p: Problem) -> FloatArray:
-    """(M,): for each mode, the smallest setup that can precede it on its arm."""
+def min_incoming_setup(p: Problem) -> FloatArray:
+    """(M,): for each mode, the smallest setup that can precede it on its arm.
+
+    The least over the arm's initial pose and every other task the arm can
+    do (0 where none is finite): a bound on the travel into the mode in
+    every valid schedule, whether setups obey the triangle inequality or not.
+    """
     out = np.zeros(p.n_modes)
     if p._setup.zero:
         return out
@@ -441,7 +447,7 @@ def mode_heads(
         Shapes (M,), (T,), (T,).
     """
     if setup_in is None:
-        setup_in = _min_incoming_setup(p)
+        setup_in = min_incoming_setup(p)
     arrive = p.arm_available[p.mode_arm] + setup_in
     dur = p.mode_duration
     est_mode = np.zeros(p.n_modes)
@@ -466,7 +472,7 @@ def lower_bounds(problem: Problem) -> LowerBounds:
     p = problem
     if p.n_tasks == 0:
         return LowerBounds(0.0, 0.0, 0.0, 0.0, 0.0)
-    extra = _min_incoming_setup(p)
+    extra = min_incoming_setup(p)
     est_mode, _, tail = mode_heads(p, extra)
     ect = np.full(p.n_tasks, np.inf)
     np.minimum.at(ect, p.mode_task, est_mode + p.mode_duration)

@@ -50,6 +50,7 @@ from typing import Any
 
 import numpy as np
 
+from multiarm.types import FloatArray
 from scheduler import _ctrl_c
 from scheduler.problem import Problem
 from scheduler.result import Result, SolveStatus
@@ -58,6 +59,7 @@ from scheduler.start import begin
 
 __all__ = [
     "add_arm_sequences",
+    "arrival_heads",
     "build_model",
     "cpsat_bound",
     "essential_resources",
@@ -283,6 +285,7 @@ def build_model(
         else math.ceil(horizon * scale * 1.02) + 2 * (max_refs + 2) * T + 10
     )
     mdl = cp_model.CpModel()
+    arrive = arrival_heads(p)
     S = [mdl.new_int_var(hi(float(p.task_release[t])), H, f"S{t}") for t in range(T)]
     E = [mdl.new_int_var(0, H, f"E{t}") for t in range(T)]
     X: dict[int, Any] = {}
@@ -333,9 +336,9 @@ def build_model(
             mdl.add(E[t] == prev + hi(d)).only_enforce_if(x)
             mdl.add(size_t == E[t] - S[t]).only_enforce_if(x)
             a = int(p.mode_arm[m])
-            mdl.add(S[t] >= hi(float(p.arm_available[a]) + p.setup_time(a, -1, t))).only_enforce_if(
-                x
-            )
+            # the initial pose's setup binds only the arm's first task (on the
+            # circuit's start arc); every task waits at least the least setup in
+            mdl.add(S[t] >= hi(float(arrive[m]))).only_enforce_if(x)
             mode_iv[m] = mdl.new_optional_interval_var(S[t], size_t, E[t], x, f"I{m}")
             for r, i, s, k, e in pieces:
                 fixed = hi(e) - lo(s)
@@ -354,7 +357,7 @@ def build_model(
         for q in p.task_preds[t]:
             mdl.add(S[t] >= E[q])
     # arms
-    add_arm_sequences(mdl, p, mode_iv, X, S, E, hi)
+    first = add_arm_sequences(mdl, p, mode_iv, X, S, E, hi)
     # arms standing in exclusive start zones until they leave
     for a in range(p.n_arms):
         zs = [z for z in p.arm_start_zones[a] if p.zone_exclusive[z] and z in shared]
@@ -367,8 +370,9 @@ def build_model(
             for m in modes:
                 t = int(p.mode_task[m])
                 e_m = mdl.new_int_var(-H, H, "")
-                mdl.add(e_m == S[t] - lo(p.setup_time(a, -1, t))).only_enforce_if(X[m])
-                mdl.add(e_m == H).only_enforce_if(~X[m])
+                lit = first.get(m, X[m])  # the arm's first task (any task without setups)
+                mdl.add(e_m == S[t] - lo(p.setup_time(a, -1, t))).only_enforce_if(lit)
+                mdl.add(e_m == H).only_enforce_if(~lit)
                 cands.append(e_m)
             mdl.add_min_equality(dep, cands)
         else:
@@ -739,15 +743,28 @@ def add_arm_sequences(
     S: Any,
     E: Any,
     to_units: Callable[[float], int],
-) -> None:
+) -> dict[int, Any]:
     """Each arm does one mode at a time, with its setups (travel) between them.
 
     A no-overlap of the arm's mode ``intervals``, and, when the problem has
     setups, a circuit over the arm's modes whose arcs enforce
-    ``S[t2] >= E[t] + setup(a, t, t2)`` (``to_units`` rounds the setup into
-    model units: outward for a bound-safe model, inward for a relaxation).
-    Shared by the CP-SAT model and the overlap relaxation.
+    ``S[t2] >= E[t] + setup(a, t, t2)`` and, on the start arc into the arm's
+    first mode, ``S[t] >= available[a] + setup(a, -1, t)`` (``to_units``
+    rounds into model units: outward for a bound-safe model, inward for a
+    relaxation). The initial pose's setup binds the first mode only: setups
+    need not obey the triangle inequality (a task may move the arm closer to
+    the next one), so it is no bound on a later task's start
+    (:func:`arrival_heads` is). Shared by the CP-SAT model and the
+    relaxations.
+
+    Returns
+    -------
+    dict
+        Mode -> the literal "this mode is its arm's first" (empty without
+        setups: then every chosen mode's start is bounded by
+        ``available[a]`` alone).
     """
+    first: dict[int, Any] = {}
     for a in range(p.n_arms):
         modes = [int(m) for m in np.flatnonzero(p.mode_arm == a)]
         if not modes:
@@ -756,9 +773,17 @@ def add_arm_sequences(
         if p._setup.zero:
             continue
         arcs = []
+        avail = float(p.arm_available[a])
         for i, m in enumerate(modes, start=1):
             t = int(p.mode_task[m])
-            arcs.append((0, i, mdl.new_bool_var("")))
+            go = mdl.new_bool_var("")
+            first[m] = go
+            arcs.append((0, i, go))
+            head = avail + p.setup_time(a, -1, t)
+            if math.isfinite(head):
+                mdl.add(S[t] >= to_units(head)).only_enforce_if(go)
+            else:
+                mdl.add(go == 0)
             arcs.append((i, 0, mdl.new_bool_var("")))
             arcs.append((i, i, ~X[m]))
             for j, m2 in enumerate(modes, start=1):
@@ -770,3 +795,18 @@ def add_arm_sequences(
                 mdl.add(S[t2] >= E[t] + to_units(p.setup_time(a, t, t2))).only_enforce_if(lit)
         arcs.append((0, 0, mdl.new_bool_var("")))
         mdl.add_circuit(arcs)
+    return first
+
+
+def arrival_heads(p: Problem) -> FloatArray:
+    """(M,): the earliest a mode can start on its arm's account, seconds.
+
+    ``available[a]`` plus the least setup of ``a`` into the task, from its
+    initial pose or from any other task ``a`` can do: valid for every
+    mode of every valid schedule, setups obeying the triangle inequality
+    or not (:func:`scheduler.bounds.mode_heads` uses the same).
+    """
+    from scheduler.bounds import min_incoming_setup
+
+    out: FloatArray = p.arm_available[p.mode_arm] + min_incoming_setup(p)
+    return out

@@ -65,6 +65,7 @@ import numpy as np
 from multiarm.types import FloatArray
 from scheduler.cpsat import (
     add_arm_sequences,
+    arrival_heads,
     cpsat_bound,
     essential_resources,
     resource_windows,
@@ -309,6 +310,7 @@ def overlap_model(
     T = p.n_tasks
     H = math.ceil(horizon * scale * 1.02) + 10
     dur = [fl(float(d)) for d in p.mode_duration]
+    arrive = arrival_heads(p)
     mdl = cp_model.CpModel()
     S = [mdl.new_int_var(fl(float(p.task_release[t])), H, f"S{t}") for t in range(T)]
     E = [mdl.new_int_var(0, H, f"E{t}") for t in range(T)]
@@ -324,9 +326,7 @@ def overlap_model(
             X[m] = x
             lits.append(x)
             mdl.add(size >= dur[m]).only_enforce_if(x)
-            a = int(p.mode_arm[m])
-            first = fl(float(p.arm_available[a]) + p.setup_time(a, -1, t))
-            mdl.add(S[t] >= first).only_enforce_if(x)
+            mdl.add(S[t] >= fl(float(arrive[m]))).only_enforce_if(x)
             iv[m] = mdl.new_optional_interval_var(S[t], size, E[t], x, f"I{m}")
         mdl.add_exactly_one(lits)
         for q in p.task_preds[t]:

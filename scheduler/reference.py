@@ -65,6 +65,7 @@ from scheduler.bounds import lower_bound
 from scheduler.cpsat import (
     _rounders,
     _time_values,
+    arrival_heads,
     cpsat_bound,
     essential_resources,
     integer_scale,
@@ -269,6 +270,7 @@ def nowait_model(
     T, M = p.n_tasks, p.n_modes
     H = hi(horizon) + 1 if exact else math.ceil(horizon * scale * 1.02) + 4 * T + 10
     dur = [hi(float(d)) for d in p.mode_duration]
+    arrive = arrival_heads(p)
     mdl = cp_model.CpModel()
     S = [mdl.new_int_var(hi(float(p.task_release[t])), H, f"S{t}") for t in range(T)]
     E = [mdl.new_int_var(0, H, f"E{t}") for t in range(T)]
@@ -287,10 +289,8 @@ def nowait_model(
             X[m] = x
             lits.append(x)
             mdl.add(size == dur[m]).only_enforce_if(x)
-            a = int(p.mode_arm[m])
-            mdl.add(S[t] >= hi(float(p.arm_available[a]) + p.setup_time(a, -1, t))).only_enforce_if(
-                x
-            )
+            # the initial pose's setup binds the first task only (start arc below)
+            mdl.add(S[t] >= hi(float(arrive[m]))).only_enforce_if(x)
             iv[m] = mdl.new_optional_fixed_size_interval_var(S[t], dur[m], x, f"I{m}")
         mdl.add_exactly_one(lits)
         for q in p.task_preds[t]:
@@ -303,9 +303,16 @@ def nowait_model(
         if not p._setup.zero:
             arcs = []
             arc_lits[a] = {}
+            avail = float(p.arm_available[a])
             for i, m in enumerate(modes, start=1):
                 t = int(p.mode_task[m])
-                arcs.append((0, i, mdl.new_bool_var("")))
+                go = mdl.new_bool_var("")
+                head = avail + p.setup_time(a, -1, t)
+                if math.isfinite(head):
+                    mdl.add(S[t] >= hi(head)).only_enforce_if(go)
+                else:
+                    mdl.add(go == 0)
+                arcs.append((0, i, go))
                 arcs.append((i, 0, mdl.new_bool_var("")))
                 arcs.append((i, i, ~X[m]))
                 arc_lits[a][(-1, m)] = arcs[-3][2]
@@ -371,8 +378,9 @@ def nowait_model(
             for m in modes:
                 t = int(p.mode_task[m])
                 e_m = mdl.new_int_var(-H, H, "")
-                mdl.add(e_m == S[t] - lo(p.setup_time(a, -1, t))).only_enforce_if(X[m])
-                mdl.add(e_m == H).only_enforce_if(~X[m])
+                lit = arc_lits[a][(-1, m)] if a in arc_lits else X[m]  # the arm's first task
+                mdl.add(e_m == S[t] - lo(p.setup_time(a, -1, t))).only_enforce_if(lit)
+                mdl.add(e_m == H).only_enforce_if(~lit)
                 cands.append(e_m)
             mdl.add_min_equality(dep, cands or [H])
             for m in range(M):

@@ -126,13 +126,13 @@ def busy_resources_model(
     def fl(x: float) -> int:
         return math.floor(x * scale + 1e-9)
 
-    from scheduler.bounds import _min_incoming_setup
+    from scheduler.bounds import min_incoming_setup
 
     T = p.n_tasks
     H = math.ceil(horizon * scale * 1.02) + 10
     dur = [fl(float(d)) for d in p.mode_duration]
     # an arm is available, then travels into each task (from its initial pose or a task)
-    arrive = p.arm_available[p.mode_arm] + _min_incoming_setup(p)
+    arrive = p.arm_available[p.mode_arm] + min_incoming_setup(p)
     mdl = cp_model.CpModel()
     S = [mdl.new_int_var(fl(float(p.task_release[t])), H, f"S{t}") for t in range(T)]
     E = [mdl.new_int_var(0, H, f"E{t}") for t in range(T)]
