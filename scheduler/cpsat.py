@@ -337,7 +337,7 @@ def build_model(
             mdl.add(size_t == E[t] - S[t]).only_enforce_if(x)
             a = int(p.mode_arm[m])
             # the initial pose's setup binds only the arm's first task (on the
-            # circuit's start arc); every task waits at least the least setup in
+            # circuit's start arc); every task keeps its arm's shortest way in
             mdl.add(S[t] >= hi(float(arrive[m]))).only_enforce_if(x)
             mode_iv[m] = mdl.new_optional_interval_var(S[t], size_t, E[t], x, f"I{m}")
             for r, i, s, k, e in pieces:
@@ -801,12 +801,33 @@ def add_arm_sequences(
 def arrival_heads(p: Problem) -> FloatArray:
     """(M,): the earliest a mode can start on its arm's account, seconds.
 
-    ``available[a]`` plus the least setup of ``a`` into the task, from its
-    initial pose or from any other task ``a`` can do: valid for every
-    mode of every valid schedule, setups obeying the triangle inequality
-    or not (:func:`scheduler.bounds.mode_heads` uses the same).
+    ``available[a]`` plus the shortest way of ``a`` into the task: from its
+    initial pose straight or through other tasks of ``a`` (each at its
+    shortest mode on ``a``, with the setups between). Valid for every mode
+    of every valid schedule, setups obeying the triangle inequality or not;
+    where they obey it, it is ``available[a] + setup(a, -1, t)``.
     """
-    from scheduler.bounds import min_incoming_setup
-
-    out: FloatArray = p.arm_available[p.mode_arm] + min_incoming_setup(p)
+    out: FloatArray = p.arm_available[p.mode_arm].astype(float)
+    if p._setup.zero:
+        return out
+    for a in range(p.n_arms):
+        modes = np.flatnonzero(p.mode_arm == a)
+        if len(modes) == 0:
+            continue
+        tasks = np.unique(p.mode_task[modes])
+        dmin = np.full(p.n_tasks, np.inf)
+        np.minimum.at(dmin, p.mode_task[modes], p.mode_duration[modes])
+        dist = np.full(p.n_tasks, np.inf)
+        dist[tasks] = np.asarray(p.setup_row(a, -1), dtype=float)[tasks]
+        left = np.zeros(p.n_tasks, dtype=bool)
+        left[tasks] = True
+        while left.any():  # Dijkstra, dense: the tasks of one arm
+            u = int(np.flatnonzero(left)[np.argmin(dist[left])])
+            left[u] = False
+            if not np.isfinite(dist[u]):
+                break
+            via = dist[u] + dmin[u] + np.asarray(p.setup_row(a, u), dtype=float)
+            dist[left] = np.minimum(dist[left], via[left])
+        head = dist[p.mode_task[modes]]
+        out[modes] += np.where(np.isfinite(head), head, 0.0)
     return out

@@ -8,8 +8,9 @@ initial pose into a task can exceed the way through another task
 resources) once bounded *every* task's start by ``available + setup(-1,
 t)``: on such data CP-SAT called a feasible problem infeasible and the
 relaxations' bounds could exceed the optimum. Now that setup is enforced on
-the circuit's start arc only, and every task's start keeps the least setup
-into it (:func:`scheduler.cpsat.arrival_heads`).
+the circuit's start arc only, and every task's start keeps the arm's shortest
+way into it (:func:`scheduler.cpsat.arrival_heads`: the initial setup itself
+where setups are metric, so the models lose no strength there).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import numpy as np
 import pytest
 
 from scheduler import Model, SolveStatus, solve, validate
+from scheduler.cpsat import arrival_heads
 from scheduler.problem import Problem
 from scheduler.reference import best_bound, solve_reference
 from scheduler.setup import MatrixSetup
@@ -111,3 +113,35 @@ def test_models_and_bounds_agree_with_brute_force_on_non_metric_setups(seed: int
     validate(p, ref.schedule)
     assert ref.bound <= opt + 1e-6
     assert best_bound(p, 10, workers=1) <= opt + 1e-6
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_arrival_heads_are_the_initial_setup_where_setups_are_metric(seed: int) -> None:
+    """Travel between points of a plane (a metric) keeps the models as strong as before."""
+    rng = np.random.default_rng(seed)
+    T = 6
+    m = Model()
+    for a in ("a", "b"):
+        m.add_arm(a, available=float(rng.integers(0, 4)))
+    for t in range(T):
+        m.add_task(f"t{t}")
+        for a in ("a", "b"):
+            m.add_mode(f"t{t}", a, float(rng.integers(1, 5)))
+    home = rng.uniform(0, 10, size=(2, 2))
+    where = rng.uniform(0, 10, size=(T, 2))
+    times = np.zeros((2, T + 1, T))
+    for a in range(2):
+        times[a, 0] = np.linalg.norm(where - home[a], axis=1)
+        times[a, 1:] = np.linalg.norm(where[:, None] - where[None], axis=2)
+    m.set_setup(MatrixSetup(times))
+    p = m.build()
+    want = np.array(
+        [
+            p.arm_available[p.mode_arm[k]]
+            + p.setup_time(int(p.mode_arm[k]), -1, int(p.mode_task[k]))
+            for k in range(p.n_modes)
+        ]
+    )
+    np.testing.assert_allclose(arrival_heads(p), want)
+    # and below it on the one-arm pair that breaks the inequality: 0 through t0, not 10
+    np.testing.assert_allclose(arrival_heads(_one_arm_pair()), [0.0, 1.0])
