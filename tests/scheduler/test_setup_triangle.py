@@ -130,9 +130,9 @@ def test_arrival_heads_are_the_initial_setup_where_setups_are_metric(seed: int) 
     home = rng.uniform(0, 10, size=(2, 2))
     where = rng.uniform(0, 10, size=(T, 2))
     times = np.zeros((2, T + 1, T))
-    for a in range(2):
-        times[a, 0] = np.linalg.norm(where - home[a], axis=1)
-        times[a, 1:] = np.linalg.norm(where[:, None] - where[None], axis=2)
+    for k in range(2):
+        times[k, 0] = np.linalg.norm(where - home[k], axis=1)
+        times[k, 1:] = np.linalg.norm(where[:, None] - where[None], axis=2)
     m.set_setup(MatrixSetup(times))
     p = m.build()
     want = np.array(
