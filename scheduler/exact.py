@@ -609,6 +609,7 @@ def prove(
     diagram_step: float | None = None,
     max_leaves: int = 2_000_000,
     plain_nodes: int = 100_000,
+    select: bool = True,
 ) -> Proof:
     """Prove the optimum by branch and bound (the exact method for compiled cells).
 
@@ -682,6 +683,7 @@ def prove(
             stop=stop,
             cap_step=cap_step,
             modes=modes,
+            select=select,
         )
         first = again(
             None if time_limit is None else time_limit / 4,
@@ -750,7 +752,7 @@ def prove(
     n_iv = sum(max(len(shape[m].intervals) for m in p.task_modes[t]) for t in range(T))
     # every branch adds one edge per pair of intervals or tasks, at most once on a path
     max_edges = 4 * n_pts + 2 * len(p.task_preds) + sum(map(len, p.task_preds))
-    max_edges += n_iv * n_iv + T * T + 64
+    max_edges += 2 * n_iv * n_iv + T * T + 64  # branches and immediate selections
     head = np.full(n_pts, -1, dtype=np.int64)
     nxt = np.zeros(max_edges, dtype=np.int64)
     src = np.zeros(max_edges, dtype=np.int64)
@@ -770,6 +772,7 @@ def prove(
         "diagram_calls": 0,
         "kept": 0,
         "searched": 0,
+        "selected": 0,
     }
     reason = [""]
     last_report = [t0]
@@ -874,6 +877,10 @@ def prove(
             "out": np.zeros(6),
             "tt": np.zeros(T),
             "order": np.zeros(n, dtype=np.int64),
+            "sel": np.zeros((len(rows), len(rows)), dtype=np.bool_),
+            "si": np.zeros(len(rows) * len(rows) + 1, dtype=np.int64),
+            "sj": np.zeros(len(rows) * len(rows) + 1, dtype=np.int64),
+            "sn": np.zeros(1, dtype=np.int64),
         }
 
     def bound2(a: dict[str, Any], cut: float = math.inf, deep: bool = True) -> float:
@@ -908,6 +915,24 @@ def prove(
         best_mk = validate(problem, sched)
         best_sched = sched
 
+    def selected(a: dict[str, Any]) -> tuple[bool, Any]:
+        """Immediate selection at the node (:func:`scheduler.kernel.exact_bb.select_pairs`,
+        against the incumbent): whether the node may still hold a better
+        schedule, and the pairs it ordered (their marks to clear on leaving)."""
+        if not select or not math.isfinite(best_mk):
+            return True, None
+        kb.stn_tails(head, nxt, dst, wt, a["t_end"], tail_pt)
+        ok = bool(
+            kb.select_pairs(
+                head, nxt, src, dst, wt, ne, dist, queue, queued, a["t_arm"], a["t_tail"],
+                a["i_lo"], a["i_task"], a["i_ps"], a["i_os"], a["i_pe"], a["i_oe"], a["i_len"],
+                a["i_tail"], tail_pt, best_mk - _EPS, a["sel"], a["si"], a["sj"], a["sn"], 64,
+            )
+        )  # fmt: skip
+        n = int(a["sn"][0])
+        stats["selected"] += n
+        return ok, (a["si"][:n].copy(), a["sj"][:n].copy()) if n else None
+
     def disjunctive(a: dict[str, Any], floor: float = 0.0) -> None:
         if exhausted():
             return
@@ -915,6 +940,18 @@ def prove(
         if floor >= best_mk - _EPS or bound2(a, best_mk - _EPS, False) >= best_mk - _EPS:
             stats["pruned"] += 1
             return
+        ok, marks = selected(a)
+        try:
+            if not ok or (marks is not None and bound2(a, best_mk - _EPS, False) >= best_mk - _EPS):
+                stats["pruned"] += 1
+                return
+            branch(a, floor)
+        finally:
+            if marks is not None:
+                a["sel"][marks] = False
+
+    def branch(a: dict[str, Any], floor: float) -> None:
+        """Record the node's schedule when no conflict is left, else branch on one."""
         out = a["out"]
         if not kb.conflict(
             dist, a["t_start"], a["t_end"], a["t_arm"], a["setup"], a["i_lo"], a["i_task"],
@@ -1224,6 +1261,7 @@ def prove(
             ("kept", int(stats["kept"])),
             ("diagrams", int(stats["diagram_calls"])),
             ("searched", int(stats["searched"])),
+            ("selected", int(stats["selected"])),
         ),
     )
 
