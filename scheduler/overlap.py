@@ -114,8 +114,10 @@ def _pair(
     blocked = np.zeros((n, m), dtype=np.bool_)
     nodiag = np.zeros((n, m), dtype=np.bool_)
     for s1, e1, s2, e2, presence in rects:
-        i0, i1 = math.floor(s1 / step) + 1, math.ceil(e1 / step) - 2
-        j0, j1 = math.floor(s2 / step) + 1, math.ceil(e2 / step) - 2
+        # cells entirely inside the open rectangle, the quotients moved by 1e-6
+        # of a cell towards fewer cells (rounding never marks a crossable cell)
+        i0, i1 = math.floor(s1 / step + 1e-6) + 1, math.ceil(e1 / step - 1e-6) - 2
+        j0, j1 = math.floor(s2 / step + 1e-6) + 1, math.ceil(e2 / step - 1e-6) - 2
         if i0 <= i1 and j0 <= j1:
             nodiag[i0 : i1 + 1, j0 : j1 + 1] = True
             if presence:

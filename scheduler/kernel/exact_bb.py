@@ -25,6 +25,7 @@ __all__ = [
     "diagram_chain",
     "jackson_bound",
     "node_bound",
+    "select_pairs",
     "stn_add",
     "stn_pop",
     "stn_tails",
@@ -455,12 +456,18 @@ def node_bound(
 def _mark(
     flags: Any, s1: float, e1: float, s2: float, e2: float, step: float
 ) -> None:  # pragma: no cover - compiled
-    """Set the cells lying entirely inside the open rectangle (as :mod:`scheduler.overlap`)."""
+    """Set the cells lying entirely inside the open rectangle (as :mod:`scheduler.overlap`).
+
+    Cell ``i`` is ``[i step, (i + 1) step]``: inside ``(s, e)`` when ``i >
+    s / step`` and ``i < e / step - 1``. The quotients are moved by 1e-6 of
+    a cell towards marking fewer cells, so that rounding (an ``e / step`` a
+    hair above the whole number it really is) never marks a cell that a
+    real path may cross: fewer marked cells only lower the bound."""
     n, m = flags.shape
-    i0 = max(int(np.floor(s1 / step)) + 1, 0)
-    i1 = min(int(np.ceil(e1 / step)) - 2, n - 1)
-    j0 = max(int(np.floor(s2 / step)) + 1, 0)
-    j1 = min(int(np.ceil(e2 / step)) - 2, m - 1)
+    i0 = max(int(np.floor(s1 / step + 1e-6)) + 1, 0)
+    i1 = min(int(np.ceil(e1 / step - 1e-6)) - 2, n - 1)
+    j0 = max(int(np.floor(s2 / step + 1e-6)) + 1, 0)
+    j1 = min(int(np.ceil(e2 / step - 1e-6)) - 2, m - 1)
     for i in range(i0, i1 + 1):
         for j in range(j0, j1 + 1):
             flags[i, j] = True
@@ -595,3 +602,100 @@ def diagram_bound(
         if low < np.inf:
             best = max(best, low)
     return best
+
+
+@njit(cache=True)  # type: ignore[untyped-decorator]
+def select_pairs(
+    head: Any,
+    nxt: Any,
+    src: Any,
+    dst: Any,
+    wt: Any,
+    ne: Any,
+    dist: Any,
+    queue: Any,
+    queued: Any,
+    t_arm: Any,
+    t_tail: Any,
+    i_lo: Any,
+    i_task: Any,
+    i_ps: Any,
+    i_os: Any,
+    i_pe: Any,
+    i_oe: Any,
+    i_len: Any,
+    i_tail: Any,
+    tail_pt: Any,
+    ub: float,
+    sel: Any,
+    out_i: Any,
+    out_j: Any,
+    out_n: Any,
+    max_rounds: int,
+) -> bool:  # pragma: no cover - compiled
+    """Immediate selection on every resource group (Carlier and Pinson's pair
+    rule), to a fixed point; False when the node has no completion shorter
+    than ``ub``.
+
+    Intervals ``i`` and ``j`` of tasks of different arms in one group never
+    overlap. If ``i`` came first, ``j`` would start no earlier than ``i``'s
+    earliest end ``ee_i`` (its earliest start plus its nominal length, or its
+    end point's earliest time if later), last at least its nominal length
+    and be followed by at least its tail (the larger of the rest of its task
+    plus the task's static tail and ``tail_pt`` of its end point less the
+    end's offset: the network's longest path to a task's end, from
+    :func:`stn_tails` at this node or an ancestor, or ``-inf``), so every such completion ends at ``ee_i + len_j +
+    tail_j`` or later. When that reaches ``ub``, every completion shorter
+    than ``ub`` puts ``j`` first: the edge ``x[ps_i] + os_i >= x[pe_j] +
+    oe_j`` is added (:func:`stn_add`) and ``sel[j, i]`` set, and the pair
+    recorded in ``out_i, out_j`` (their number in ``out_n[0]``, also when
+    False is returned: the caller clears ``sel`` there when it leaves the
+    node). When both orders reach ``ub``, or an edge closes a
+    positive cycle, no completion is shorter than ``ub``. Earliest times only
+    grow, so the rule is applied again until nothing changes (at most
+    ``max_rounds`` passes; stopping earlier only adds fewer orders).
+    """
+    k = 0
+    G = len(i_lo) - 1
+    for _ in range(max_rounds):
+        added = 0
+        for g in range(G):
+            for i in range(i_lo[g], i_lo[g + 1]):
+                ti = i_task[i]
+                ee_i = max(dist[i_ps[i]] + i_os[i] + i_len[i], dist[i_pe[i]] + i_oe[i])
+                q_i = max(i_tail[i] + t_tail[ti], tail_pt[i_pe[i]] - i_oe[i])
+                for j in range(i + 1, i_lo[g + 1]):
+                    tj = i_task[j]
+                    if t_arm[ti] == t_arm[tj] or sel[i, j] or sel[j, i]:
+                        continue
+                    ee_j = max(dist[i_ps[j]] + i_os[j] + i_len[j], dist[i_pe[j]] + i_oe[j])
+                    q_j = max(i_tail[j] + t_tail[tj], tail_pt[i_pe[j]] - i_oe[j])
+                    no_ij = ee_i + i_len[j] + q_j >= ub  # i first: too long
+                    no_ji = ee_j + i_len[i] + q_i >= ub
+                    if no_ij and no_ji:
+                        out_n[0] = k
+                        return False
+                    if no_ij:  # j first
+                        a, b = j, i
+                    elif no_ji:
+                        a, b = i, j
+                    else:
+                        continue
+                    if ne[0] >= len(src):
+                        raise RuntimeError("edge store full")
+                    sel[a, b] = True
+                    out_i[k] = a
+                    out_j[k] = b
+                    k += 1
+                    added += 1
+                    if not stn_add(
+                        head, nxt, src, dst, wt, ne, dist, queue, queued,
+                        i_pe[a], i_ps[b], i_oe[a] - i_os[b],
+                    ):  # fmt: skip
+                        out_n[0] = k
+                        return False
+                    ee_i = max(dist[i_ps[i]] + i_os[i] + i_len[i], dist[i_pe[i]] + i_oe[i])
+        if added == 0:
+            break
+    out_n[0] = k
+    return True

@@ -117,3 +117,32 @@ def test_prove_meets_cpsat_with_arms_taking_turns_in_one_zone(seed: int) -> None
     # the sequence level on its own too (no first search without it)
     seq = prove(p, max_nodes=5_000_000, plain_nodes=0)
     assert seq.proven and seq.makespan == pytest.approx(cp.objective, abs=1e-6)
+
+
+@pytest.mark.parametrize("step", [1 / 16, 0.06249999999999999, 0.0625000000000001, 0.1])
+def test_diagram_bound_lets_a_path_along_a_window_that_ends_with_the_axis(step: float) -> None:
+    """Regression: both arms' last windows in one zone end with their axes,
+    so the end of the diagram is a corner of the forbidden rectangle. A cell
+    side a hair below 1/16 once put ``e / step`` a hair above 16 and marked
+    the last cell, so the bound said "no path" (-1) and ``prove`` cut the
+    optimal leaf (``random_problem(3, 6, 1, 0, seed=902, zone_fraction=1.0)``
+    "proven" at 30 instead of CP-SAT's 27)."""
+    from scheduler.kernel.exact_bb import diagram_bound
+
+    one = np.zeros(1, dtype=np.int64)
+    half, end = np.array([0.5]), np.array([1.0])
+    none_i, none_f = np.zeros(0, dtype=np.int64), np.zeros(0)
+    got = diagram_bound(
+        1.0, 1.0, one, half, end, one, half, end, np.array([True]), none_i, none_f, none_f,
+        none_f, none_f, none_f, none_f, step, np.inf,
+    )  # fmt: skip
+    # A's window first, then B's: 0.5 together, 0.5 A alone, 0.5 B alone
+    assert 0.0 <= got <= 1.5 + 1e-9
+
+
+def test_sequence_level_meets_cpsat_where_the_diagram_rounding_cut_the_optimum() -> None:
+    p = random_problem(3, 6, 1, 0, seed=902, zone_fraction=1.0)
+    cp = solve(p, "cpsat", time_limit=20, seed=0, workers=1)
+    assert cp.status.value == "optimal" and cp.objective == pytest.approx(27.0)
+    res = prove(p, max_nodes=5_000_000, plain_nodes=0, select=False)
+    assert res.proven and res.makespan == pytest.approx(27.0, abs=1e-6)
