@@ -26,6 +26,7 @@ from multiarm.types import FloatArray, IntArray
 from scheduler.kernel._jit import jit_enabled
 from scheduler.kernel.arrays import Instance, State, compile_problem
 from scheduler.kernel.critical import _chain, cheapest_slot, critical_chain
+from scheduler.kernel.moves_jit import _neighbour_moves, chrono_extend, neighbour_moves
 from scheduler.kernel.passes import (
     RESUME,
     _decode,
@@ -372,7 +373,16 @@ _WARM = False
 
 def _cached_on_disk() -> bool:
     """Whether numba's on-disk cache already holds the kernel's entry points."""
-    for fn in (_decode, _expand, _expand_blocking, _place_one, _seq_decode, _chain, _decode_chunks):
+    for fn in (
+        _decode,
+        _expand,
+        _expand_blocking,
+        _place_one,
+        _seq_decode,
+        _chain,
+        _decode_chunks,
+        _neighbour_moves,
+    ):
         cache = getattr(fn, "_cache", None)
         path = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
         if path is None or not os.path.exists(path):
@@ -453,6 +463,12 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         decode_resume(inst, order, free, snaps, snaps, 0, every=every)
         copy_rows(snaps, new_snaps(inst, len(order), every), 0, 1)
         critical_chain(inst, st3)
+        rng = np.random.default_rng(0)
+        pos = np.arange(len(order), dtype=np.int64)
+        for chrono in (False, True):  # the local search's moves
+            neighbour_moves(inst, st3, order, st3.t_mode.copy(), rng, chrono=chrono)
+        one = np.zeros(1, dtype=np.int64)
+        chrono_extend(inst, st3, order, pos, (one, one + 3, one - 1), rng)
         cheapest_slot(inst, 0, 0, np.zeros(0, dtype=np.int64), 0, 0)  # the tabu search's
     _WARM = True
     spent = time.perf_counter() - t0
