@@ -32,7 +32,15 @@ from multiarm.types import FloatArray, IntArray
 from scheduler.kernel import State, compile_problem, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
 from scheduler.kernel.moves_jit import BEFORE, LIST, MODE, chrono_extend, neighbour_moves
-from scheduler.kernel.resume import Snaps, chunk_size, copy_rows, decode_resume, new_snaps
+from scheduler.kernel.resume import (
+    Snaps,
+    chunk_size,
+    copy_rows,
+    decode_resume,
+    new_flags,
+    new_snaps,
+    restore,
+)
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
 
@@ -154,6 +162,7 @@ class Evaluator:
         self._anchor_sol: Solution | None = None
         self._last_sol: Solution | None = None
         self._last_k = -1
+        self._root_state: State | None = None
 
     # ---------------------------------------------------------- decoding
     def decode(
@@ -212,8 +221,11 @@ class Evaluator:
         T = self.problem.n_tasks
         if n != self._snap_n:
             self._every = chunk_size(n)
-            self._snaps = new_snaps(self.inst, n, self._every)
-            self._scratch = new_snaps(self.inst, n, self._every)
+            # chronological decoding keeps only the flags: a boundary's state
+            # is restored from the anchor's complete state (kernel.resume.restore)
+            buffer = new_flags if self.chrono else new_snaps
+            self._snaps = buffer(self.inst, n, self._every)
+            self._scratch = buffer(self.inst, n, self._every)
             self._snap_n = n
             self._anchor_order = self._anchor_modes = self._anchor_sol = None
         snaps, scratch = self._snaps, self._scratch
@@ -234,6 +246,16 @@ class Evaluator:
             k_from = k
         self.evaluations += 1
         state = self.base.copy() if (k_from < 0 and self.base is not None) else None
+        if self.chrono:
+            root = self._root()
+            anchor = self._anchor_sol
+            if k_from < 0 or anchor is None or anchor.state is None or ao is None:
+                k_from = -1
+                state = root.copy()
+            else:
+                state = restore(
+                    self.inst, root, anchor.state, ao, k_from * self._every, self.inst.new_state()
+                )
         code, st = decode_resume(
             self.inst,
             order,
@@ -248,6 +270,7 @@ class Evaluator:
             release=self.release,
             allowed=self.allowed,
             arm_lb=self.arm_lb,
+            states=not self.chrono,
         )
         self._last_sol = None
         if code != 0:
@@ -261,6 +284,13 @@ class Evaluator:
         )
         self._last_sol, self._last_k = sol, k_from
         return sol
+
+    def _root(self) -> State:
+        """The state every list is decoded from (the base, or the empty
+        schedule); never changed."""
+        if self._root_state is None:
+            self._root_state = self.base if self.base is not None else self.inst.new_state()
+        return self._root_state
 
     def anchor(self, sol: Solution) -> bool:
         """Make ``sol`` the list that :meth:`evaluate_resume` resumes from.

@@ -36,7 +36,15 @@ from scheduler.kernel.passes import (
     _seq_decode,
 )
 from scheduler.kernel.place import MISSING, PLACED
-from scheduler.kernel.resume import _decode_chunks, chunk_size, copy_rows, decode_resume, new_snaps
+from scheduler.kernel.resume import (
+    _decode_chunks,
+    chunk_size,
+    copy_rows,
+    decode_resume,
+    new_flags,
+    new_snaps,
+    restore,
+)
 from scheduler.problem import Model, Window
 
 __all__ = ["decode", "expand", "expand_blocking", "place_blocking", "seq_decode", "warm_up"]
@@ -462,6 +470,16 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         _code, st3 = decode_resume(inst, order, free, snaps, snaps, -1, every=every)
         decode_resume(inst, order, free, snaps, snaps, 0, every=every)
         copy_rows(snaps, new_snaps(inst, len(order), every), 0, 1)
+        # chronological resumes: flags only, a boundary restored from the complete state
+        flags = new_flags(inst, len(order), every)
+        _code, fin = decode_resume(
+            inst, order, free, flags, flags, -1, every=every, chrono=True, states=False
+        )
+        root = inst.new_state()
+        back = restore(inst, root, fin, order, 0, inst.new_state())
+        decode_resume(
+            inst, order, free, flags, flags, 0, every=every, state=back, chrono=True, states=False
+        )
         critical_chain(inst, st3)
         rng = np.random.default_rng(0)
         pos = np.arange(len(order), dtype=np.int64)
