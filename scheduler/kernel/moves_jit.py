@@ -41,7 +41,7 @@ import numpy as np
 from multiarm.types import BoolArray, FloatArray, IntArray
 from scheduler.kernel._jit import njit
 from scheduler.kernel.arrays import Instance, State
-from scheduler.kernel.critical import TOL, _chain, _index, _prev_on_arm, _reasons
+from scheduler.kernel.critical import TOL, _chain, _index, _prev_on_arm, _reasons, _sorted_ends
 
 __all__ = ["AFTER", "BEFORE", "LIST", "MODE", "chrono_extend", "neighbour_moves"]
 
@@ -79,6 +79,7 @@ def _extend(d, st, order, pos, release, c_t, c_kind, c_by, rng, links, tol):
     own_r = np.zeros(0, dtype=np.int64)
     own_k = np.zeros(0, dtype=np.int64)
     prev = np.zeros(0, dtype=np.int64)
+    ordered = np.zeros(0, dtype=np.bool_)
     kind = np.zeros(0, dtype=np.int64)
     by = np.zeros(0, dtype=np.int64)
     while n > 0 and o_kind[n - 1] == 3 and links > 0:
@@ -100,10 +101,11 @@ def _extend(d, st, order, pos, release, c_t, c_kind, c_by, rng, links, tol):
             if not built:
                 ptr, own_r, own_k = _index(st, d.res_lo.shape[0], d.res_lo, T)
                 prev = _prev_on_arm(st, d.arm_lo, d.arm_lo.shape[0], T)
+                ordered = _sorted_ends(st, d.res_lo.shape[0], d.res_lo)
                 kind = np.empty(T + 1 + own_k.shape[0] + st.tl_task.shape[0], dtype=np.int64)
                 by = np.empty(kind.shape[0], dtype=np.int64)
                 built = True
-            k = _reasons(d, st, u, prev, ptr, own_r, own_k, tol, kind, by)
+            k = _reasons(d, st, u, prev, ptr, own_r, own_k, ordered, tol, kind, by)
             if k == 0:
                 o_t[n] = u
                 o_kind[n] = 3
