@@ -18,11 +18,13 @@ Reported:
   plan whatever the machine's load), with a wall-clock budget instead
   (``time_limit`` = the 15 ms budget: the repaired plan plus the search
   decodes that fit; the plan then depends on the machine's speed), and the
-  warm start alone (``evaluations=1``); for each: wall and CPU time
+  smaller work limits (``evaluations=8`` and ``6``: what a call would
+  cost and give with less search) and the warm start alone
+  (``evaluations=1``); for each: wall and CPU time
   p50/p90/p99/max, the mean of each part
   (:attr:`scheduler.Rescheduled.phases`), the mean re-solved makespan and a
   hash of every plan (starts and modes);
-* **the baseline** (``baseline``, a git revision, e.g. ``main``): the same
+* **the baseline** (``baseline``, a git revision, e.g. ``53e9ddf``): the same
   scenarios simulated and the same calls replayed by that revision's code,
   in a second process fed call by call, alternating with this one: its
   in-loop latencies and executed makespans, its replayed wall and CPU
@@ -79,6 +81,8 @@ PARTS = ("prepare", "state", "first", "search", "decodes", "build", "validate")
 MODES: dict[str, dict[str, Any]] = {
     "work-limited (default)": {},
     "budget 15 ms (time_limit=0.015)": {"time_limit": BUDGET_MS / 1e3},
+    "work limit 8 (evaluations=8)": {"evaluations": 8},
+    "work limit 6 (evaluations=6)": {"evaluations": 6},
     "warm start only (evaluations=1)": {"evaluations": 1},
 }
 """The replayed variants: keyword overrides of the recorded call."""
