@@ -14,12 +14,21 @@ Reported:
   search each: once per question for the problem's lifetime), and the
   executed makespans;
 * **replayed side by side** -- each recorded call made again, in
-  alternating order, as the coordinator makes it now (``check=False``: the
-  new plan is not validated in the call) and as it was made before
-  (``check=True``: validated in every call), and the warm start alone
-  (``evaluations=1``: the floor of a call that decodes the whole remaining
-  list); for each: wall and CPU time p50/p90/p99/max, the mean of each part
-  (:attr:`scheduler.Rescheduled.phases`) and the mean re-solved makespan.
+  alternating order, as the coordinator makes it (work-limited: the same
+  plan whatever the machine's load), with a wall-clock budget instead
+  (``time_limit`` = the 15 ms budget: the repaired plan plus the search
+  decodes that fit; the plan then depends on the machine's speed), and the
+  smaller work limits (``evaluations=8`` and ``6``: what a call would
+  cost and give with less search) and the warm start alone
+  (``evaluations=1``); for each: wall and CPU time
+  p50/p90/p99/max, the mean of each part
+  (:attr:`scheduler.Rescheduled.phases`), the mean re-solved makespan and a
+  hash of every plan (starts and modes);
+* **the baseline** (``baseline``, a git revision, e.g. ``53e9ddf``): the same
+  scenarios simulated and the same calls replayed by that revision's code,
+  in a second process fed call by call, alternating with this one: its
+  in-loop latencies and executed makespans, its replayed wall and CPU
+  times, and whether its plans hash the same.
 
 The recording intercepts the name :mod:`workcell.sim.coordination.recovery`
 calls (a measurement only: the call and its result are passed through).
@@ -29,16 +38,25 @@ A thin wrapper of the sweep ``benchmarks/sweeps/resolve_loop.toml`` (one
 Results: ``benchmarks/results/resolve_loop.parquet``, ``.json`` and ``.md``.
 
 Run: ``python -m benchmarks.bench_resolve_loop [--quick]`` (``--quick``:
-supersigma, three scenarios; seconds).
+supersigma, three scenarios, no baseline; seconds; with the baseline the
+revision's kernel is compiled once in a temporary copy, a few minutes).
 """
 
 from __future__ import annotations
 
+import hashlib
+import io
+import json
 import os
+import pickle
+import subprocess
 import sys
+import tarfile
+import tempfile
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -48,7 +66,8 @@ from benchmarks.bench_sim import _scenarios
 from benchmarks.common import table_main
 from multiarm.errors import MultiarmError
 from scheduler import solve
-from scheduler.reschedule import Rescheduled, reschedule
+from scheduler.reschedule import FrozenTask, Rescheduled, reschedule
+from scheduler.schedule import Schedule
 from workcell import compile_cell, load_example
 from workcell.sim.harness.options import SimOptions
 from workcell.sim.harness.simulate import simulate
@@ -60,8 +79,10 @@ BUDGET_MS = 15.0
 PARTS = ("prepare", "state", "first", "search", "decodes", "build", "validate")
 
 MODES: dict[str, dict[str, Any]] = {
-    "now (check=False)": {"check": False},
-    "before (check=True)": {"check": True},
+    "work-limited (default)": {},
+    "budget 15 ms (time_limit=0.015)": {"time_limit": BUDGET_MS / 1e3},
+    "work limit 8 (evaluations=8)": {"evaluations": 8},
+    "work limit 6 (evaluations=6)": {"evaluations": 6},
     "warm start only (evaluations=1)": {"evaluations": 1},
 }
 """The replayed variants: keyword overrides of the recorded call."""
@@ -96,8 +117,17 @@ def _recording(calls: list[dict[str, Any]], oracle: list[tuple[float, int]]) -> 
         recovery.reschedule = reschedule
 
 
+def plan_hash(r: Rescheduled) -> str:
+    """A short hash of a re-solved plan's starts and modes ("" without one)."""
+    s = r.schedule
+    if s is None:
+        return ""
+    data = np.asarray(s.start, dtype=np.float64).tobytes() + np.asarray(s.mode, np.int64).tobytes()
+    return hashlib.sha256(data).hexdigest()[:16]
+
+
 def _one(kw: dict[str, Any]) -> dict[str, Any]:
-    """One replayed call: wall and CPU seconds, its parts and its makespan."""
+    """One replayed call: wall and CPU seconds, its parts, its makespan and plan hash."""
     c0 = time.thread_time()
     t0 = time.perf_counter()
     r = reschedule(**kw)
@@ -109,12 +139,135 @@ def _one(kw: dict[str, Any]) -> dict[str, Any]:
         "makespan": r.makespan,
         "phases_ms": {k: v * 1e3 for k, v in r.phases},
         "ok": r.schedule is not None,
+        "hash": plan_hash(r),
     }
 
 
-def measure(seed: int, cell: str, scenarios: int, time_limit: float, repeat: int) -> dict[str, Any]:
+def _plain(x: Any) -> Any:
+    """Schedules and frozen tasks as tuples of arrays (read by another revision)."""
+    if isinstance(x, Schedule):
+        return ("schedule", x.mode, x.start, x.end, [np.asarray(w) for w in x.waits], x.blocking)
+    if isinstance(x, FrozenTask):
+        return ("frozen", x.mode, x.start, x.end, x.waits)
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    return x
+
+
+_CHILD = r"""
+import json, pickle, sys, time
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+import scheduler
+assert scheduler.__file__.startswith(sys.argv[1]), scheduler.__file__
+from scheduler.reschedule import FrozenTask, reschedule
+from scheduler.schedule import Schedule
+from workcell import compile_cell, load_example
+from workcell.sim.harness.faults import FaultPlan
+from workcell.sim.harness.options import SimOptions
+from workcell.sim.harness.simulate import simulate
+import hashlib
+import io
+
+def back(x):
+    if isinstance(x, tuple) and x and x[0] == "schedule":
+        return Schedule(x[1], x[2], x[3], tuple(x[4]), x[5])
+    if isinstance(x, tuple) and x and x[0] == "frozen":
+        return FrozenTask(int(x[1]), float(x[2]), float(x[3]), tuple(x[4]))
+    if isinstance(x, dict):
+        return {k: back(v) for k, v in x.items()}
+    return x
+
+job = pickle.load(open(sys.argv[2], "rb"))
+cc = compile_cell(load_example(job["cell"]))
+p = cc.problem
+plan = back(job["plan"])
+calls = [{k: back(v) for k, v in kw.items()} for kw in job["calls"]]
+simulate(cc, plan, seed=0, options=SimOptions(monitor=False))
+for kw in calls:
+    reschedule(p, **kw)
+print("ready", flush=True)
+for line in sys.stdin:
+    cmd, i = line.split()
+    i = int(i)
+    if cmd == "sim":
+        res = simulate(cc, plan, seed=job["seed"], faults=FaultPlan.from_dicts(job["faults"][i]),
+                       options=SimOptions(monitor=False))
+        m = res.metrics
+        out = {"latency_ms": (np.asarray(m.resolve_latency, dtype=float) * 1e3).tolist(),
+               "executed_makespan": float(m.executed_makespan), "failed": int(m.failed_tasks)}
+    else:
+        c0 = time.thread_time(); t0 = time.perf_counter()
+        r = reschedule(p, **calls[i])
+        wall = time.perf_counter() - t0; cpu = time.thread_time() - c0
+        s = r.schedule
+        h = "" if s is None else hashlib.sha256(np.asarray(s.start, dtype=np.float64).tobytes()
+                                                + np.asarray(s.mode, np.int64).tobytes()).hexdigest()[:16]
+        out = {"wall_ms": wall * 1e3, "cpu_ms": cpu * 1e3, "makespan": r.makespan,
+               "ok": s is not None, "hash": h}
+    print(json.dumps(out), flush=True)
+"""
+"""The baseline's process: the same plan, scenarios and calls, one command per line."""
+
+
+class _Baseline:
+    """Another revision's code in a second process (:data:`_CHILD`), fed
+    one simulation or one call at a time."""
+
+    def __init__(self, rev: str, job: dict[str, Any]) -> None:
+        self.dir = tempfile.TemporaryDirectory(prefix="multiarm-baseline-")
+        root = Path(self.dir.name)
+        repo = Path(__file__).resolve().parent.parent
+        tar = subprocess.run(
+            ["git", "archive", "--format=tar", rev], cwd=repo, capture_output=True, check=True
+        ).stdout
+        with tarfile.open(fileobj=io.BytesIO(tar)) as tf:
+            tf.extractall(root, filter="data")
+        self.rev = subprocess.run(
+            ["git", "rev-parse", "--short", rev], cwd=repo, capture_output=True, text=True
+        ).stdout.strip()
+        with open(root / "job.pkl", "wb") as fh:
+            pickle.dump(job, fh)
+        env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", _CHILD, str(root), str(root / "job.pkl")],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            cwd=root,
+            env=env,
+        )
+        if self._line() != "ready":
+            raise MultiarmError(f"the baseline {rev!r} did not start")
+
+    def _line(self) -> str:
+        assert self.proc.stdout is not None
+        return self.proc.stdout.readline().strip()
+
+    def ask(self, cmd: str, i: int) -> dict[str, Any]:
+        assert self.proc.stdin is not None
+        self.proc.stdin.write(f"{cmd} {i}\n")
+        self.proc.stdin.flush()
+        line = self._line()
+        if not line:
+            raise MultiarmError("the baseline process stopped")
+        out: dict[str, Any] = json.loads(line)
+        return out
+
+    def close(self) -> None:
+        if self.proc.stdin is not None:
+            self.proc.stdin.close()
+        self.proc.wait(timeout=60)
+        self.dir.cleanup()
+
+
+def measure(
+    seed: int, cell: str, scenarios: int, time_limit: float, repeat: int, baseline: str = ""
+) -> dict[str, Any]:
     """The whole table: the scenarios simulated with re-solving on, then every
-    recorded call replayed ``repeat`` times in each variant (:data:`MODES`)."""
+    recorded call replayed ``repeat`` times in each variant (:data:`MODES`);
+    with a ``baseline`` revision, its process simulates each scenario and
+    replays each call alternately with this one."""
     load = os.getloadavg()[0]
     cc = compile_cell(load_example(cell))
     p = cc.problem
@@ -123,11 +276,12 @@ def measure(seed: int, cell: str, scenarios: int, time_limit: float, repeat: int
         raise MultiarmError(f"cell {cell!r}: the tree search found no plan in {time_limit:g} s")
     plan = r.schedule
     simulate(cc, plan, seed=0, options=SimOptions(monitor=False))  # warm caches and compiled code
+    scen = _scenarios(cc, plan, scenarios, seed)
     calls: list[dict[str, Any]] = []
     oracle: list[tuple[float, int]] = []
     loop_ms: list[float] = []
     runs: list[dict[str, Any]] = []
-    for label, faults in _scenarios(cc, plan, scenarios, seed):
+    for label, faults in scen:
         print(f"bench_resolve_loop: {label}", file=sys.stderr, flush=True)
         before = len(calls)
         with _recording(calls, oracle):
@@ -146,13 +300,45 @@ def measure(seed: int, cell: str, scenarios: int, time_limit: float, repeat: int
                 "failed": int(m.failed_tasks),
             }
         )
+    base: dict[str, Any] = {}
+    child: _Baseline | None = None
+    if baseline:
+        print(f"bench_resolve_loop: starting the baseline {baseline}", file=sys.stderr, flush=True)
+        child = _Baseline(
+            baseline,
+            {
+                "cell": cell,
+                "seed": seed,
+                "plan": _plain(plan),
+                "faults": [f.to_dicts() for _label, f in scen],
+                "calls": [{k: _plain(v) for k, v in kw.items() if k != "problem"} for kw in calls],
+            },
+        )
+        base = {"revision": child.rev, "scenarios": [], "loop_ms": [], "replay": []}
+        # the scenarios again, alternating: the baseline's, then this revision's
+        for i, (label, faults) in enumerate(scen):
+            print(f"bench_resolve_loop: side by side: {label}", file=sys.stderr, flush=True)
+            got = child.ask("sim", i)
+            base["scenarios"].append({"fault": label, **got})
+            base["loop_ms"] += got["latency_ms"]
+            res = simulate(cc, plan, seed=seed, faults=faults, options=SimOptions(monitor=False))
+            m = res.metrics
+            runs[i]["latency_ms_again"] = (
+                np.asarray(m.resolve_latency, dtype=float) * 1e3
+            ).tolist()
     replay: dict[str, list[dict[str, Any]]] = {mode: [] for mode in MODES}
     names = list(MODES)
     for i, kw in enumerate(calls):
         for rep in range(repeat):
             order = names if (i + rep) % 2 == 0 else names[::-1]  # alternate which runs first
+            if child is not None and rep % 2 == 0:
+                base["replay"].append({"call": i, **child.ask("call", i)})
             for mode in order:
                 replay[mode].append({"call": i, **_one({**kw, **MODES[mode]})})
+            if child is not None and rep % 2 == 1:
+                base["replay"].append({"call": i, **child.ask("call", i)})
+    if child is not None:
+        child.close()
     return {
         "cell": cell,
         "seed": seed,
@@ -164,6 +350,7 @@ def measure(seed: int, cell: str, scenarios: int, time_limit: float, repeat: int
         "remaining": [p.n_tasks - len(kw["done"]) - len(kw["running"]) for kw in calls],
         "loop_ms": loop_ms,
         "replay": replay,
+        "baseline": base,
         "repeat": repeat,
         "load_average_start": load,
         "load_average_end": os.getloadavg()[0],
@@ -173,6 +360,7 @@ def measure(seed: int, cell: str, scenarios: int, time_limit: float, repeat: int
 def table(r: Any) -> str:
     """The Markdown tables of the one measured row."""
     loop = np.asarray(r["loop_ms"], dtype=float)
+    base = r.get("baseline") or {}
 
     def q(xs: Any, k: float) -> str:
         xs = np.asarray(xs, dtype=float)
@@ -181,6 +369,16 @@ def table(r: Any) -> str:
     def mx(xs: Any) -> str:
         xs = np.asarray(xs, dtype=float)
         return f"{float(xs.max()):.1f}" if xs.size else "-"
+
+    # the plan of each call as the default (work-limited) variant made it
+    default: list[dict[str, Any]] = next(iter(r["replay"].values()), [])
+    want = {x["call"]: x.get("hash", "") for x in default}
+
+    def same(rows: list[dict[str, Any]]) -> str:
+        if not rows or not want:
+            return "-"
+        k = sum(1 for x in rows if x.get("hash", "") == want.get(x["call"]))
+        return f"{k}/{len(rows)}"
 
     remaining = r["remaining"]
     lines = [
@@ -195,17 +393,37 @@ def table(r: Any) -> str:
             if remaining
             else ""
         )
-        + f"Budget {BUDGET_MS:g} ms (p99).",
+        + f"Budget {BUDGET_MS:g} ms (p99)."
+        + (
+            f" Baseline: revision {base['revision']}, in a second process fed the same "
+            "scenarios and calls one at a time, alternating with this one."
+            if base
+            else ""
+        ),
         "",
         "## Latency (ms)",
         "",
         "| calls | n | wall p50 | wall p90 | wall p99 | wall max | CPU p50 | CPU p99 "
-        "| mean re-solved makespan (s) |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| mean re-solved makespan (s) | plans as the default's |",
+        "|---|---|---|---|---|---|---|---|---|---|",
         f"| in the loop (as simulated) | {loop.size} | {q(loop, 50)} | {q(loop, 90)} | "
-        f"{q(loop, 99)} | {mx(loop)} | - | - | - |",
+        f"{q(loop, 99)} | {mx(loop)} | - | - | - | - |",
     ]
-    for mode, rows in r["replay"].items():
+    if base:
+        again = np.asarray(
+            [x for sc in r["scenarios"] for x in sc.get("latency_ms_again", [])], dtype=float
+        )
+        bl = np.asarray(base["loop_ms"], dtype=float)
+        lines += [
+            f"| in the loop, side by side: this revision | {again.size} | {q(again, 50)} | "
+            f"{q(again, 90)} | {q(again, 99)} | {mx(again)} | - | - | - | - |",
+            f"| in the loop, side by side: baseline {base['revision']} | {bl.size} | "
+            f"{q(bl, 50)} | {q(bl, 90)} | {q(bl, 99)} | {mx(bl)} | - | - | - | - |",
+        ]
+    rows_all = list(r["replay"].items())
+    if base:
+        rows_all.append((f"baseline {base['revision']} (its default)", base["replay"]))
+    for mode, rows in rows_all:
         wall = [x["wall_ms"] for x in rows]
         cpu = [x["cpu_ms"] for x in rows]
         mk = [x["makespan"] for x in rows if x["ok"]]
@@ -213,7 +431,7 @@ def table(r: Any) -> str:
             f"| replayed: {mode} | {len(rows)} | {q(wall, 50)} | {q(wall, 90)} | {q(wall, 99)} | "
             f"{mx(wall)} | {q(cpu, 50)} | {q(cpu, 99)} | "
             + (f"{np.mean(mk):.3f}" if mk else "-")
-            + " |"
+            + f" | {same(rows)} |"
         )
     lines += [
         "",
@@ -232,15 +450,16 @@ def table(r: Any) -> str:
         "",
         "`decodes` is the part of `first` and `search` spent in the decoder; `prepare` "
         "the dropped tasks and the warm start, `state` the frozen prefix committed, "
-        "`build` the schedule record, `validate` the check of the new plan.",
+        "`build` the schedule record, `validate` the check of the new plan (off).",
         "",
         "## Scenarios (re-solving on)",
         "",
         "| fault | re-solves | latency in the loop (ms) | of which the blocking oracle "
-        "(ms, new answers) | executed makespan (s) | failed |",
-        "|---|---|---|---|---|---|",
+        "(ms, new answers) | executed makespan (s) | failed |"
+        + (" baseline: latency (ms) | baseline: executed makespan (s) |" if base else ""),
+        "|---|---|---|---|---|---|" + ("---|---|" if base else ""),
     ]
-    for sc in r["scenarios"]:
+    for i, sc in enumerate(r["scenarios"]):
         lat = ", ".join(f"{x:.1f}" for x in sc["latency_ms"]) or "-"
         orc = (
             ", ".join(
@@ -249,10 +468,23 @@ def table(r: Any) -> str:
             )
             or "-"
         )
-        lines.append(
+        row = (
             f"| {sc['fault']} | {sc['resolves']} | {lat} | {orc} | "
             f"{sc['executed_makespan']:.1f} | {sc['failed']} |"
         )
+        if base:
+            b = base["scenarios"][i]
+            blat = ", ".join(f"{x:.1f}" for x in b["latency_ms"]) or "-"
+            row += f" {blat} | {b['executed_makespan']:.1f} |"
+        lines.append(row)
+    if base:
+        mine = [sc["executed_makespan"] for sc in r["scenarios"]]
+        theirs = [b["executed_makespan"] for b in base["scenarios"]]
+        lines += [
+            "",
+            f"Mean executed makespan: {np.mean(mine):.3f} s (this revision), "
+            f"{np.mean(theirs):.3f} s (baseline {base['revision']}).",
+        ]
     lines += [
         "",
         f"Load average {r['load_average_start']:.1f} at the start and "

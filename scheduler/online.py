@@ -195,13 +195,22 @@ def reschedule(
         a = _arm(p, ref)
         arm_lb[a] = max(arm_lb[a], float(until))
     # the frozen prefix, committed in start order
+    # (exactly where it was: each after its arm's frozen tasks so far)
     base = inst.new_state()
-    for t in sorted(frozen, key=lambda t: (frozen[t][1], t)):
-        m, s, e, w = frozen[t]
-        # exactly where it was: after the arm's frozen tasks so far
-        a = int(p.mode_arm[m])
-        k = int(base.arm_n[a])
-        inst.commit(base, t, m, s, e, k, w)
+    if frozen:
+        ts = sorted(frozen, key=lambda t: (frozen[t][1], t))
+        fw = np.zeros((len(ts), max(inst.max_borders, 1)))
+        for i, t in enumerate(ts):
+            w = frozen[t][3]
+            fw[i, : len(w)] = w
+        inst.commit_all(
+            base,
+            np.array(ts, dtype=np.int64),
+            np.array([frozen[t][0] for t in ts], dtype=np.int64),
+            np.array([frozen[t][1] for t in ts], dtype=np.float64),
+            np.array([frozen[t][2] for t in ts], dtype=np.float64),
+            fw,
+        )
     remaining = [t for t in range(p.n_tasks) if t not in frozen]
     ev = _TimedEvaluator(
         p,

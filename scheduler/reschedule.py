@@ -37,13 +37,17 @@ import functools
 import gc
 import math
 import time
+import weakref
 from collections.abc import Callable, Collection, Mapping
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field
 from typing import ParamSpec, TypeVar
 
 import numpy as np
+import numpy.typing as npt
 
 from multiarm.errors import UsageError, ValidationError
+from scheduler.kernel import Instance, compile_problem
 from scheduler.online import CellState
 from scheduler.online import reschedule as _online
 from scheduler.problem import Problem
@@ -123,22 +127,64 @@ class Rescheduled:
         return max(ends, default=0.0)
 
 
+@dataclass(frozen=True, slots=True)
+class _Static:
+    """What every call on one problem reuses (computed once per problem)."""
+
+    topo: tuple[int, ...]
+    """The tasks in topological order."""
+    arms: tuple[frozenset[int], ...]
+    """Per task, the arms of its modes."""
+    fastest: tuple[tuple[int, ...], ...]
+    """Per task, its modes fastest first (ties: smaller id)."""
+    mode_arm: npt.NDArray[np.int64]
+    borders: npt.NDArray[np.int64]
+    """Per mode, its number of borders."""
+    span: float
+    """Seconds between two dropped tasks' positions."""
+
+
+_STATIC: weakref.WeakKeyDictionary[Instance, _Static] = weakref.WeakKeyDictionary()
+
+
+def _static(p: Problem) -> _Static:
+    """The problem's :class:`_Static` (cached on its compiled instance)."""
+    inst = compile_problem(p)
+    got = _STATIC.get(inst)
+    if got is None:
+        dur = p.mode_duration
+        got = _Static(
+            tuple(p.topological_order),
+            tuple(frozenset(int(p.mode_arm[m]) for m in ms) for ms in p.task_modes),
+            tuple(
+                tuple(sorted((int(m) for m in ms), key=lambda m: (float(dur[m]), m)))
+                for ms in p.task_modes
+            ),
+            np.asarray(p.mode_arm, dtype=np.int64),
+            np.array([len(p.shapes[m].borders) for m in range(p.n_modes)], dtype=np.int64),
+            2.0 * float(np.sum(dur)) + 1e4,
+        )
+        _STATIC[inst] = got
+    return got
+
+
 def _dropped(
     p: Problem,
     frozen: Collection[int],
     failed: Collection[int],
-    arms_out: Collection[int],
+    arms_out: AbstractSet[int],
     parts_late: Mapping[int, float],
 ) -> set[int]:
     """Tasks that can never run (frozen tasks never are)."""
+    st = _static(p)
     out: set[int] = set()
-    for t in p.topological_order:
+    for t in st.topo:
         if t in frozen:
             continue
         if (
             t in failed
             or math.isinf(parts_late.get(t, 0.0))
-            or all(int(p.mode_arm[m]) in arms_out for m in p.task_modes[t])
+            or st.arms[t] <= arms_out
             or any(q in out for q in p.task_preds[t])
         ):
             out.add(t)
@@ -249,21 +295,24 @@ def reschedule(
     # fastest mode; the dropped tasks come last, each at its own time far
     # after the rest, so the plan's makespan is theirs whatever the live
     # tasks do, and the search can never gain by pushing a live task after them
+    st = _static(p)
+    T = p.n_tasks
     mode = np.array(previous.mode, dtype=np.int64)
     start = np.array(previous.start, dtype=float)
     waits = list(previous.waits)
-    for t in range(p.n_tasks):
-        if t in frozen:
-            continue
-        alive = [m for m in p.task_modes[t] if int(p.mode_arm[m]) not in out]
-        if t in dead:
-            alive = list(p.task_modes[t])
-        elif int(p.mode_arm[mode[t]]) not in out:
-            continue
-        mode[t] = min(alive, key=lambda m: (float(p.mode_duration[m]), m))
-        waits[t] = np.zeros(len(p.shapes[int(mode[t])].borders))
-    span = 2.0 * float(np.sum(p.mode_duration)) + 1e4
-    for k, t in enumerate(x for x in p.topological_order if x in dead):
+    live = np.ones(T, dtype=np.bool_)
+    live[[int(t) for t in frozen]] = False
+    dead_mask = np.zeros(T, dtype=np.bool_)
+    dead_mask[list(dead)] = True
+    arm_out = np.zeros(p.n_arms, dtype=np.bool_)
+    arm_out[[int(a) for a in out]] = True
+    for t in np.flatnonzero(live & (dead_mask | arm_out[st.mode_arm[mode]])).tolist():
+        # a dropped task: its fastest mode; else its fastest mode on a working arm
+        m = next(m for m in st.fastest[t] if dead_mask[t] or not arm_out[st.mode_arm[m]])
+        mode[t] = m
+        waits[t] = np.zeros(int(st.borders[m]))
+    span = st.span
+    for k, t in enumerate(x for x in st.topo if x in dead):
         releases[t] = start[t] = _FAR + k * span
     if dead:
         # an arm out keeps the modes of the tasks only it could do (they
@@ -295,9 +344,7 @@ def reschedule(
             err = "" if new is not None else f"no schedule ({res.status.value})"
         except (ScheduleError, UsageError) as exc:
             new, err = None, str(exc)
-        if new is not None and any(
-            float(new.start[t]) >= _FAR for t in range(p.n_tasks) if t not in dead
-        ):
+        if new is not None and bool(np.any((new.start >= _FAR) & ~dead_mask)):
             # a task that can run was put after the ones that cannot: take
             # the warm start decoded instead (every task in plan order)
             new, err = None, "a task that can run was planned after the dropped ones"

@@ -25,6 +25,7 @@ multiarm.errors.ScheduleError: task 't1' starts at 1 before its predecessor 't0'
 from __future__ import annotations
 
 import bisect
+import copy
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -64,6 +65,28 @@ class Reservation:
     end: float
 
 
+def _frozen(x: Any, dtype: type) -> Any:
+    """``x`` as a read-only array of ``dtype``: ``x`` itself when it already is
+    one that owns its data (or views a read-only array that does), else a copy."""
+    if (
+        isinstance(x, np.ndarray)
+        and x.dtype == dtype
+        and not x.flags.writeable
+        and (
+            x.flags.owndata
+            or (
+                isinstance(x.base, np.ndarray)
+                and x.base.flags.owndata
+                and not x.base.flags.writeable
+            )
+        )
+    ):
+        return x
+    arr: Any = np.array(x, dtype=dtype)
+    arr.setflags(write=False)
+    return arr
+
+
 @dataclass(frozen=True, eq=False)
 class Schedule:
     """A complete schedule (see the module docstring).
@@ -88,13 +111,9 @@ class Schedule:
 
     def __post_init__(self) -> None:
         for name in ("mode", "start", "end", "blocking"):
-            arr = np.array(getattr(self, name), dtype=np.int64 if name == "mode" else float)
-            arr.setflags(write=False)
+            arr = _frozen(getattr(self, name), np.int64 if name == "mode" else np.float64)
             object.__setattr__(self, name, arr)
-        waits = tuple(np.array(w, dtype=float) for w in self.waits)
-        for w in waits:
-            w.setflags(write=False)
-        object.__setattr__(self, "waits", waits)
+        object.__setattr__(self, "waits", tuple(_frozen(w, np.float64) for w in self.waits))
 
     @classmethod
     def from_starts(
@@ -179,7 +198,10 @@ class Schedule:
                 f"a schedule of {self.n_tasks} tasks cannot be bound to a problem of "
                 f"{problem.n_tasks} tasks"
             )
-        return Schedule(self.mode, self.start, self.end, self.waits, self.blocking, None, problem)
+        # the arrays are read-only and owned: shared, not copied again
+        bound = copy.copy(self)
+        object.__setattr__(bound, "_problem", problem)
+        return bound
 
     def _the_problem(self, problem: Problem | None) -> Problem:
         if problem is not None:

@@ -29,10 +29,18 @@ import numpy as np
 
 from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
-from scheduler.kernel import State, compile_problem, critical_chain, decode, to_schedule
+from scheduler.kernel import State, compile_problem, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
-from scheduler.kernel.critical import Reasons
-from scheduler.kernel.resume import Snaps, chunk_size, copy_rows, decode_resume, new_snaps
+from scheduler.kernel.moves_jit import BEFORE, LIST, MODE, chrono_extend, neighbour_moves
+from scheduler.kernel.resume import (
+    Snaps,
+    chunk_size,
+    copy_rows,
+    decode_resume,
+    new_flags,
+    new_snaps,
+    restore,
+)
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
 
@@ -138,6 +146,9 @@ class Evaluator:
         self.allowed = allowed
         self.arm_lb = arm_lb
         self.frozen = frozen
+        self.frozen_mask = np.zeros(problem.n_tasks, dtype=np.bool_)
+        """``frozen`` as a mask over the tasks (for the compiled moves)."""
+        self.frozen_mask[list(frozen)] = True
         self.stop: threading.Event | None = None
         """Set by another thread (a racing exact solver that proved the optimum) to stop."""
         # resumable decoding (evaluate_resume): the anchor's snapshots, and
@@ -151,6 +162,7 @@ class Evaluator:
         self._anchor_sol: Solution | None = None
         self._last_sol: Solution | None = None
         self._last_k = -1
+        self._root_state: State | None = None
 
     # ---------------------------------------------------------- decoding
     def decode(
@@ -209,8 +221,11 @@ class Evaluator:
         T = self.problem.n_tasks
         if n != self._snap_n:
             self._every = chunk_size(n)
-            self._snaps = new_snaps(self.inst, n, self._every)
-            self._scratch = new_snaps(self.inst, n, self._every)
+            # chronological decoding keeps only the flags: a boundary's state
+            # is restored from the anchor's complete state (kernel.resume.restore)
+            buffer = new_flags if self.chrono else new_snaps
+            self._snaps = buffer(self.inst, n, self._every)
+            self._scratch = buffer(self.inst, n, self._every)
             self._snap_n = n
             self._anchor_order = self._anchor_modes = self._anchor_sol = None
         snaps, scratch = self._snaps, self._scratch
@@ -231,6 +246,16 @@ class Evaluator:
             k_from = k
         self.evaluations += 1
         state = self.base.copy() if (k_from < 0 and self.base is not None) else None
+        if self.chrono:
+            root = self._root()
+            anchor = self._anchor_sol
+            if k_from < 0 or anchor is None or anchor.state is None or ao is None:
+                k_from = -1
+                state = root.copy()
+            else:
+                state = restore(
+                    self.inst, root, anchor.state, ao, k_from * self._every, self.inst.new_state()
+                )
         code, st = decode_resume(
             self.inst,
             order,
@@ -245,6 +270,7 @@ class Evaluator:
             release=self.release,
             allowed=self.allowed,
             arm_lb=self.arm_lb,
+            states=not self.chrono,
         )
         self._last_sol = None
         if code != 0:
@@ -258,6 +284,13 @@ class Evaluator:
         )
         self._last_sol, self._last_k = sol, k_from
         return sol
+
+    def _root(self) -> State:
+        """The state every list is decoded from (the base, or the empty
+        schedule); never changed."""
+        if self._root_state is None:
+            self._root_state = self.base if self.base is not None else self.inst.new_state()
+        return self._root_state
 
     def anchor(self, sol: Solution) -> bool:
         """Make ``sol`` the list that :meth:`evaluate_resume` resumes from.
@@ -422,16 +455,8 @@ def _move_after(
     return out
 
 
-def _before_ok(pos: IntArray, t: int, x: int, preds: tuple[tuple[int, ...], ...]) -> bool:
-    """Whether :func:`_move_before` of ``t`` before ``x`` keeps precedence."""
-    i, j = int(pos[t]), int(pos[x])
-    return i > j and all(pos[q] < j for q in preds[t])
-
-
-def _after_ok(pos: IntArray, x: int, t: int, succs: tuple[tuple[int, ...], ...]) -> bool:
-    """Whether :func:`_move_after` of ``x`` after ``t`` keeps precedence."""
-    j, i = int(pos[x]), int(pos[t])
-    return j < i and all(pos[s] > i for s in succs[x])
+_REASON_CODE = {"pred": 0, "arm": 1, "resource": 2, "release": 3, "list": LIST}
+_REASON_NAME = ("pred", "arm", "resource", "release", "list")
 
 
 def _chrono_chain(
@@ -450,123 +475,97 @@ def _chrono_chain(
     (``"release"``) at a task that starts later than its release, it was
     held there by that order: the chain goes on with reason ``"list"``, by
     the task before it in the list that starts at the same time, and from
-    there on with that task's own reasons (:class:`scheduler.kernel.critical.Reasons`).
+    there on with that task's own reasons (several: one drawn from ``rng``).
     Without this link the chain of a chronological plan stops after a few
     tasks, and the moves that would start the held task earlier (before
-    the one that held it, in the list) are never tried.
+    the one that held it, in the list) are never tried. Compiled:
+    :func:`scheduler.kernel.moves_jit.chrono_extend`.
     """
-    p = ev.problem
-    inst = ev.inst
-    tol = 1e-6
-    links = p.n_tasks if max_links is None else max_links
-    seen = {t for t, _r, _b in chain}
-    out = list(chain)
-    reasons: Reasons | None = None
-    while out and out[-1][1] == "release" and links > 0:
-        t = out[-1][0]
-        S = float(st.t_start[t])
-        release = float(p.task_release[t]) if ev.release is None else float(ev.release[t])
-        i = int(pos[t])
-        if i <= 0 or release + tol >= S:
-            break
-        x = int(order[i - 1])
-        if abs(float(st.t_start[x]) - S) > tol or x in seen:
-            break
-        out[-1] = (t, "list", x)
-        links -= 1
-        # from x on: its own reasons (a release there may be held by the list again)
-        u = x
-        while links > 0:
-            seen.add(u)
-            if reasons is None:
-                reasons = Reasons(inst, st)
-            rs = reasons(u)
-            if not rs:
-                out.append((u, "release", -1))
-                break
-            reason, by = rs[int(rng.integers(len(rs)))] if len(rs) > 1 else rs[0]
-            out.append((u, reason, by))
-            links -= 1
-            if by in seen:
-                break
-            u = by
-        else:
-            break
-    return out
+    arrays = (
+        np.array([t for t, _r, _b in chain], dtype=np.int64),
+        np.array([_REASON_CODE[r] for _t, r, _b in chain], dtype=np.int64),
+        np.array([b for _t, _r, b in chain], dtype=np.int64),
+    )
+    ts, kinds, bys = chrono_extend(
+        ev.inst, st, order, pos, arrays, rng, release=ev.release, max_links=max_links
+    )
+    return [
+        (int(t), _REASON_NAME[int(k)], int(b))
+        for t, k, b in zip(ts.tolist(), kinds.tolist(), bys.tolist(), strict=True)
+    ]
 
 
-def neighbours(
+def _moves(
     ev: Evaluator, sol: Solution, rng: np.random.Generator
-) -> list[Callable[[], tuple[IntArray, IntArray]]]:
-    """Candidate moves around the critical chain of ``sol`` (read from its
-    decoded state by the compiled :func:`scheduler.kernel.critical_chain`),
-    shuffled (frozen tasks and disallowed modes left alone). Each move is a
-    function that builds its (order, modes) when called: a first-improvement
-    search builds only the few it decodes."""
-    p = ev.problem
-    frozen = ev.frozen
-    allowed = ev.allowed
+) -> tuple[IntArray, IntArray, IntArray]:
+    """The compiled moves of :func:`neighbours` as arrays (kind, a, b)."""
     st = sol.state
     if st is None:
         ok, st = ev.decode(sol.order, sol.modes)
         if not ok:
             raise InternalError("a decoded solution no longer decodes")
         sol.state = st
-    chain = critical_chain(ev.inst, st, rng)
-    pos = np.full(p.n_tasks, -1, dtype=np.int64)
-    pos[sol.order] = np.arange(len(sol.order))
-    if ev.chrono:
-        chain = _chrono_chain(ev, st, sol.order, pos, chain, rng)
-    order, current = sol.order, sol.modes
-    moves: list[Callable[[], tuple[IntArray, IntArray]]] = []
+    if len(st.t_start) == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, empty
+    return neighbour_moves(
+        ev.inst,
+        st,
+        sol.order,
+        sol.modes,
+        rng,
+        chrono=ev.chrono,
+        frozen=ev.frozen_mask,
+        allowed=ev.allowed,
+        release=ev.release,
+    )
 
-    def ok_mode(m: int) -> bool:
-        return allowed is None or bool(allowed[m])
 
-    def with_mode(t: int, m: int) -> Callable[[], tuple[IntArray, IntArray]]:
-        def make() -> tuple[IntArray, IntArray]:
-            modes = current.copy()
-            modes[t] = m
-            return order, modes
+def _apply(
+    ev: Evaluator, sol: Solution, pos: IntArray, kind: int, a: int, b: int
+) -> tuple[IntArray, IntArray]:
+    """The (order, modes) of one move of :func:`_moves` on ``sol``."""
+    p = ev.problem
+    if kind == MODE:
+        modes = sol.modes.copy()
+        modes[a] = b
+        return sol.order, modes
+    if kind == BEFORE:
+        o = _move_before(sol.order, pos, a, b, p.task_preds)
+    else:
+        o = _move_after(sol.order, pos, a, b, p.task_succs)
+    if o is None:  # pragma: no cover - checked by the compiled moves
+        raise InternalError("a checked move broke precedence")
+    return o, sol.modes
 
-        return make
 
-    def before(t: int, x: int) -> Callable[[], tuple[IntArray, IntArray]]:
-        def make() -> tuple[IntArray, IntArray]:
-            o = _move_before(order, pos, t, x, p.task_preds)
-            if o is None:  # pragma: no cover - checked by _before_ok
-                raise InternalError("a checked move broke precedence")
-            return o, current
+def _positions(ev: Evaluator, order: IntArray) -> IntArray:
+    """Each task's position in ``order`` (-1: not in it)."""
+    pos = np.full(ev.problem.n_tasks, -1, dtype=np.int64)
+    pos[order] = np.arange(len(order))
+    return pos
 
-        return make
 
-    def after(x: int, t: int) -> Callable[[], tuple[IntArray, IntArray]]:
-        def make() -> tuple[IntArray, IntArray]:
-            o = _move_after(order, pos, x, t, p.task_succs)
-            if o is None:  # pragma: no cover - checked by _after_ok
-                raise InternalError("a checked move broke precedence")
-            return o, current
+def neighbours(
+    ev: Evaluator, sol: Solution, rng: np.random.Generator
+) -> list[Callable[[], tuple[IntArray, IntArray]]]:
+    """Candidate moves around the critical chain of ``sol``, shuffled
+    (frozen tasks and disallowed modes left alone): re-assign a chain task,
+    or the task that held it on a zone or tool; move a chain task just
+    before the task that held it (arm, resource or list), or that one just
+    after it. Each move is a function that builds its (order, modes) when
+    called: a first-improvement search builds only the few it decodes. The
+    chain and the moves are computed by the compiled
+    :func:`scheduler.kernel.moves_jit.neighbour_moves`."""
+    kinds, a_s, b_s = _moves(ev, sol, rng)
+    pos = _positions(ev, sol.order)
 
-        return make
+    def move(k: int, a: int, b: int) -> Callable[[], tuple[IntArray, IntArray]]:
+        return lambda: _apply(ev, sol, pos, k, a, b)
 
-    for t, reason, by in chain:
-        if t in frozen:
-            continue
-        for m in p.task_modes[t]:
-            if m != current[t] and ok_mode(m):
-                moves.append(with_mode(t, m))
-        if reason in ("arm", "resource", "list") and by >= 0 and by not in frozen:
-            if _before_ok(pos, t, by, p.task_preds):
-                moves.append(before(t, by))
-            if _after_ok(pos, by, t, p.task_succs):
-                moves.append(after(by, t))
-            if reason == "resource":
-                # or let the blocker go elsewhere
-                for m in p.task_modes[by]:
-                    if m != current[by] and ok_mode(m):
-                        moves.append(with_mode(by, m))
-    idx = rng.permutation(len(moves))
-    return [moves[i] for i in idx]
+    return [
+        move(k, a, b) for k, a, b in zip(kinds.tolist(), a_s.tolist(), b_s.tolist(), strict=True)
+    ]
 
 
 def perturb(
@@ -627,12 +626,13 @@ def local_search(
     while budget.room_for_iteration() and best.makespan > lower + 1e-9:
         tp = time.perf_counter()
         improved = False
-        moves = neighbours(ev, cur, rng)
+        kinds, a_s, b_s = _moves(ev, cur, rng)
+        pos = _positions(ev, cur.order)
         budget.prep = time.perf_counter() - tp
-        for make in moves:
+        for k, a, b in zip(kinds.tolist(), a_s.tolist(), b_s.tolist(), strict=True):
             if out_of_budget():
                 break
-            order, modes = make()
+            order, modes = _apply(ev, cur, pos, k, a, b)
             cand = ev.evaluate_resume(order, modes)
             if cand is None:
                 continue

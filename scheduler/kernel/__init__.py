@@ -16,6 +16,8 @@ The kernel is a small package, one job per module:
   of a complete state;
 * :mod:`~scheduler.kernel.critical`: the critical chain of a complete state
   (what the local search moves);
+* :mod:`~scheduler.kernel.moves_jit`: the local search's moves around that
+  chain (continued through the list when decoding is chronological);
 * :mod:`~scheduler.kernel.resume`: chunked list decoding that resumes from a
   saved prefix (the local search's decoder).
 
@@ -47,6 +49,7 @@ import warnings
 from pathlib import Path
 
 from scheduler.kernel import critical as _critical
+from scheduler.kernel import moves_jit as _moves_jit
 from scheduler.kernel import passes as _passes
 from scheduler.kernel import place as _place
 from scheduler.kernel import resume as _resume
@@ -72,12 +75,19 @@ from scheduler.kernel.build import to_schedule
 from scheduler.kernel.critical import critical_chain
 
 drop_stale_cache(
-    (_passes._decode, _place._query, _critical._chain, _resume._decode_chunks),
+    (
+        _passes._decode,
+        _place._query,
+        _critical._chain,
+        _resume._decode_chunks,
+        _moves_jit._neighbour_moves,
+    ),
     [
         Path(_place.__file__),
         Path(_passes.__file__),
         Path(_critical.__file__),
         Path(_resume.__file__),
+        Path(_moves_jit.__file__),
     ],
 )
 

@@ -26,6 +26,7 @@ from multiarm.types import FloatArray, IntArray
 from scheduler.kernel._jit import jit_enabled
 from scheduler.kernel.arrays import Instance, State, compile_problem
 from scheduler.kernel.critical import _chain, cheapest_slot, critical_chain
+from scheduler.kernel.moves_jit import _neighbour_moves, chrono_extend, neighbour_moves
 from scheduler.kernel.passes import (
     RESUME,
     _decode,
@@ -35,7 +36,15 @@ from scheduler.kernel.passes import (
     _seq_decode,
 )
 from scheduler.kernel.place import MISSING, PLACED
-from scheduler.kernel.resume import _decode_chunks, chunk_size, copy_rows, decode_resume, new_snaps
+from scheduler.kernel.resume import (
+    _decode_chunks,
+    chunk_size,
+    copy_rows,
+    decode_resume,
+    new_flags,
+    new_snaps,
+    restore,
+)
 from scheduler.problem import Model, Window
 
 __all__ = ["decode", "expand", "expand_blocking", "place_blocking", "seq_decode", "warm_up"]
@@ -372,7 +381,16 @@ _WARM = False
 
 def _cached_on_disk() -> bool:
     """Whether numba's on-disk cache already holds the kernel's entry points."""
-    for fn in (_decode, _expand, _expand_blocking, _place_one, _seq_decode, _chain, _decode_chunks):
+    for fn in (
+        _decode,
+        _expand,
+        _expand_blocking,
+        _place_one,
+        _seq_decode,
+        _chain,
+        _decode_chunks,
+        _neighbour_moves,
+    ):
         cache = getattr(fn, "_cache", None)
         path = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
         if path is None or not os.path.exists(path):
@@ -452,7 +470,23 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         _code, st3 = decode_resume(inst, order, free, snaps, snaps, -1, every=every)
         decode_resume(inst, order, free, snaps, snaps, 0, every=every)
         copy_rows(snaps, new_snaps(inst, len(order), every), 0, 1)
+        # chronological resumes: flags only, a boundary restored from the complete state
+        flags = new_flags(inst, len(order), every)
+        _code, fin = decode_resume(
+            inst, order, free, flags, flags, -1, every=every, chrono=True, states=False
+        )
+        root = inst.new_state()
+        back = restore(inst, root, fin, order, 0, inst.new_state())
+        decode_resume(
+            inst, order, free, flags, flags, 0, every=every, state=back, chrono=True, states=False
+        )
         critical_chain(inst, st3)
+        rng = np.random.default_rng(0)
+        pos = np.arange(len(order), dtype=np.int64)
+        for chrono in (False, True):  # the local search's moves
+            neighbour_moves(inst, st3, order, st3.t_mode.copy(), rng, chrono=chrono)
+        one = np.zeros(1, dtype=np.int64)
+        chrono_extend(inst, st3, order, pos, (one, one + 3, one - 1), rng)
         cheapest_slot(inst, 0, 0, np.zeros(0, dtype=np.int64), 0, 0)  # the tabu search's
     _WARM = True
     spent = time.perf_counter() - t0

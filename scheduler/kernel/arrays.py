@@ -25,7 +25,7 @@ import numpy as np
 from multiarm.errors import UsageError, ValidationError
 from multiarm.types import BoolArray, FloatArray, IntArray
 from scheduler.kernel._jit import INF
-from scheduler.kernel.place import _commit, _earliest, _oracle_put, _query
+from scheduler.kernel.place import _commit, _commit_all, _earliest, _oracle_put, _query
 from scheduler.setup import KernelSetup
 
 if TYPE_CHECKING:
@@ -409,6 +409,7 @@ class Instance:
         self.n_arms = problem.n_arms
         nb = max(self.max_borders, 1)
         self.scratch = Scratch(np.zeros(nb), np.zeros(nb + 1), np.zeros(nb))
+        self._empty: State | None = None
         A = problem.n_arms
         self._width = problem.n_modes + A
         per_task = int(np.diff(self.data.tm_ptr).max(initial=1))
@@ -571,6 +572,12 @@ class Instance:
         -------
         State
         """
+        if self._empty is None:
+            self._empty = self._build_empty()
+        return self._empty.copy()
+
+    def _build_empty(self) -> State:
+        """The empty partial schedule (built once; :meth:`new_state` copies it)."""
         T, A = self.n_tasks, self.n_arms
         n = max(self.tl_size, 1)
         st = State(
@@ -711,6 +718,38 @@ class Instance:
         w[: len(waits)] = waits
         st.t_waits[t] = w
         _commit(self.data, st, t, m, S, end, k, w)
+
+    def commit_all(
+        self,
+        st: State,
+        tasks: IntArray,
+        modes: IntArray,
+        starts: FloatArray,
+        ends: FloatArray,
+        waits: FloatArray,
+    ) -> None:
+        """Record placements in the given order, each task after its arm's
+        tasks so far (:meth:`commit` at the arm's next slot, in one compiled
+        call; mutates ``st``).
+
+        Parameters
+        ----------
+        st : State
+        tasks, modes : (n,) int
+        starts, ends : (n,) float
+            Seconds.
+        waits : (n, max borders) float
+            Row ``i``: the waits at the borders of ``modes[i]``, then zeros.
+        """
+        _commit_all(
+            self.data,
+            st,
+            _a(tasks, np.int64),
+            _a(modes, np.int64),
+            _a(starts, np.float64),
+            _a(ends, np.float64),
+            _a(waits, np.float64),
+        )
 
 
 _CACHE: dict[int, Instance] = {}

@@ -37,17 +37,17 @@ def to_schedule(inst: Instance, st: State) -> Schedule:
     (0, 6)
     """
     p = inst.problem
-    shapes = p.shapes
-    T = p.n_tasks
-    waits = []
-    blocking = np.zeros(T)
-    modes, starts, ends = st.t_mode.tolist(), st.t_start.tolist(), st.t_end.tolist()
-    for t in range(T):
-        sh = shapes[modes[t]]
-        w = st.t_waits[t, : len(sh.borders)]
-        waits.append(w)
-        b = max(0.0, ends[t] - starts[t] - sh.length(w))
-        if b > 1e-12 * max(1.0, abs(ends[t])):
-            blocking[t] = b
-    # Schedule copies the arrays (and every wait row) into read-only ones
-    return Schedule(st.t_mode, st.t_start, st.t_end, tuple(waits), blocking)
+    modes = st.t_mode
+    nb = inst.data.bd_ptr[modes + 1] - inst.data.bd_ptr[modes]
+    # one read-only copy of the waits; each task's row is a view of it
+    W = np.array(st.t_waits, dtype=np.float64)
+    W.setflags(write=False)
+    waits = [W[t, :k] for t, k in enumerate(nb.tolist())]
+    # duration plus waits, summed as ModeShape.length sums them
+    length = np.array(p.mode_duration, dtype=np.float64)[modes]
+    for t in np.flatnonzero(W.any(axis=1)).tolist():
+        length[t] = length[t] + sum(waits[t].tolist())
+    b = st.t_end - st.t_start - length
+    blocking = np.where(b > 1e-12 * np.maximum(1.0, np.abs(st.t_end)), b, 0.0)
+    # Schedule copies the mode, start and end arrays into read-only ones
+    return Schedule(modes, st.t_start, st.t_end, tuple(waits), blocking)

@@ -98,8 +98,24 @@ def _prev_on_arm(st, arm_lo, n_arms, T):
 
 
 @njit(cache=True)
-def _reasons(d, st, t, prev, ptr, own_r, own_k, tol, out_kind, out_by):
-    """Every reason why ``t`` starts when it does (module docstring); their count."""
+def _sorted_ends(st, n_res, res_lo):
+    """Per resource, whether its intervals' ends are in order too (then the
+    ones meeting a start are found by bisection)."""
+    out = np.ones(n_res, dtype=np.bool_)
+    for r in range(n_res):
+        lo = res_lo[r]
+        for k in range(lo + 1, lo + st.res_n[r]):
+            if st.tl_e[k] < st.tl_e[k - 1]:
+                out[r] = False
+                break
+    return out
+
+
+@njit(cache=True)
+def _reasons(d, st, t, prev, ptr, own_r, own_k, ordered, tol, out_kind, out_by):
+    """Every reason why ``t`` starts when it does (module docstring); their count.
+    ``ordered`` (:func:`_sorted_ends`) lets the scan of a timeline start at
+    the first end that can meet (the same reasons, in the same order)."""
     n = 0
     S = st.t_start[t]
     m = st.t_mode[t]
@@ -124,8 +140,21 @@ def _reasons(d, st, t, prev, ptr, own_r, own_k, tol, out_kind, out_by):
         r = own_r[i]
         s = st.tl_s[own_k[i]]
         lo = d.res_lo[r]
-        # ends are sorted like starts (intervals on one timeline never overlap)
-        for k in range(lo, lo + st.res_n[r]):
+        hi = lo + st.res_n[r]
+        first = lo
+        if ordered[r]:
+            # the first end >= s - tol (the scan below skips the earlier ones)
+            x0 = lo
+            x1 = hi
+            while x0 < x1:
+                mid = (x0 + x1) // 2
+                if st.tl_e[mid] >= s - tol:
+                    x1 = mid
+                else:
+                    x0 = mid + 1
+            first = x0
+        # the scan stops at the first end past the start
+        for k in range(first, hi):
             e = st.tl_e[k]
             if e > s + tol:
                 break
@@ -147,6 +176,7 @@ def _chain(d, st, u, tol):
     n_res = d.res_lo.shape[0]
     ptr, own_r, own_k = _index(st, n_res, d.res_lo, T)
     prev = _prev_on_arm(st, d.arm_lo, d.arm_lo.shape[0], T)
+    ordered = _sorted_ends(st, n_res, d.res_lo)
     cap = T + 1 + own_k.shape[0] + st.tl_task.shape[0]
     kind = np.empty(cap, dtype=np.int64)
     by = np.empty(cap, dtype=np.int64)
@@ -161,7 +191,7 @@ def _chain(d, st, u, tol):
     n = 0
     while not seen[t]:
         seen[t] = True
-        k = _reasons(d, st, t, prev, ptr, own_r, own_k, tol, kind, by)
+        k = _reasons(d, st, t, prev, ptr, own_r, own_k, ordered, tol, kind, by)
         c_t[n] = t
         if k == 0:
             c_kind[n] = 3
@@ -232,6 +262,7 @@ class Reasons:
         self._tol = float(tol)
         self._ptr, self._own_r, self._own_k = _index(st, d.res_lo.shape[0], d.res_lo, T)
         self._prev = _prev_on_arm(st, d.arm_lo, d.arm_lo.shape[0], T)
+        self._ordered = _sorted_ends(st, d.res_lo.shape[0], d.res_lo)
         cap = T + 1 + len(self._own_k) + len(st.tl_task)
         self._kind: IntArray = np.empty(cap, dtype=np.int64)
         self._by: IntArray = np.empty(cap, dtype=np.int64)
@@ -247,6 +278,7 @@ class Reasons:
                 self._ptr,
                 self._own_r,
                 self._own_k,
+                self._ordered,
                 self._tol,
                 self._kind,
                 self._by,
@@ -273,10 +305,11 @@ def task_reasons(inst: Instance, st: State, t: int, tol: float = TOL) -> list[tu
     d = inst.data
     ptr, own_r, own_k = _index(st, d.res_lo.shape[0], d.res_lo, T)
     prev = _prev_on_arm(st, d.arm_lo, d.arm_lo.shape[0], T)
+    ordered = _sorted_ends(st, d.res_lo.shape[0], d.res_lo)
     cap = T + 1 + len(own_k) + len(st.tl_task)
     kind: IntArray = np.empty(cap, dtype=np.int64)
     by: IntArray = np.empty(cap, dtype=np.int64)
-    n = int(_reasons(d, st, int(t), prev, ptr, own_r, own_k, float(tol), kind, by))
+    n = int(_reasons(d, st, int(t), prev, ptr, own_r, own_k, ordered, float(tol), kind, by))
     return [(REASONS[int(kind[i])], int(by[i])) for i in range(n)]
 
 

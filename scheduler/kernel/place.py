@@ -470,6 +470,17 @@ def _commit(d, st, t, m, S, end, k, waits):
 
 
 @njit(cache=True)
+def _commit_all(d, st, ts, ms, ss, es, ws):
+    """Record tasks ``ts`` in modes ``ms`` at ``[ss, es)`` with waits ``ws``
+    (rows), in this order, each after its arm's tasks so far."""
+    for i in range(len(ts)):
+        t = ts[i]
+        m = ms[i]
+        st.t_waits[t, :] = ws[i]
+        _commit(d, st, t, m, ss[i], es[i], st.arm_n[d.mode_arm[m]], ws[i])
+
+
+@njit(cache=True)
 def _earliest(d, st, t, chrono, release):
     """Earliest start of t: release, predecessors' ends (and the latest start if chronological)."""
     pred_idx = d.pred_idx

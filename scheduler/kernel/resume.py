@@ -45,7 +45,7 @@ from scheduler.kernel._jit import njit
 from scheduler.kernel.arrays import Instance, State
 from scheduler.kernel.passes import RESUME, _decode
 
-__all__ = ["Snaps", "chunk_size", "copy_rows", "decode_resume", "new_snaps"]
+__all__ = ["Snaps", "chunk_size", "copy_rows", "decode_resume", "new_flags", "new_snaps", "restore"]
 
 
 class Snaps(NamedTuple):
@@ -160,21 +160,29 @@ def _copy_rows(src, dst, lo, hi):
 
 
 @njit(cache=True)
-def _decode_chunks(d, st, cx, sc, ot, order, fixed, every, src, k_from, out, buf, outer, inner):
+def _decode_chunks(
+    d, st, cx, sc, ot, order, fixed, every, src, k_from, out, buf, outer, inner, states
+):
     """Decode ``order`` in chunks (module docstring), from row ``k_from`` of
     ``src`` (-1: from ``st`` as given, saved as row 0), saving each boundary
-    into ``out``. ``outer`` = (next position, mid-chunk, carried, chunk
-    length, started) and ``inner`` (the chunk's :func:`_decode` cursor) let a
-    call stopped for missing oracle answers resume. Returns 0, -1 (some task
-    could not be placed) or RESUME."""
+    into ``out``. Without ``states`` only the flags ``out.ok`` are written
+    and ``st`` already holds boundary ``k_from`` (:func:`restore`).
+    ``outer`` = (next position, mid-chunk, carried, chunk length, started)
+    and ``inner`` (the chunk's :func:`_decode` cursor) let a call stopped for
+    missing oracle answers resume. Returns 0, -1 (some task could not be
+    placed) or RESUME."""
     n_order = order.shape[0]
     if outer[4] == 0:
         outer[4] = 1
         if k_from >= 0:
-            _load(src, k_from, st)
+            if states:
+                _load(src, k_from, st)
             outer[0] = k_from * every
         else:
-            _save(st, out, 0)
+            if states:
+                _save(st, out, 0)
+            else:
+                out.ok[0] = True
             outer[0] = 0
     while True:
         if outer[1] == 0:
@@ -204,9 +212,134 @@ def _decode_chunks(d, st, cx, sc, ot, order, fixed, every, src, k_from, out, buf
         if pos % every == 0:
             k = pos // every
             if outer[2] == 0:
-                _save(st, out, k)
+                if states:
+                    _save(st, out, k)
+                else:
+                    out.ok[k] = True
             else:
                 out.ok[k] = False
+
+
+def new_flags(inst: Instance, n: int, every: int) -> Snaps:
+    """A snapshot buffer that holds only the flags (``ok``), no states:
+    chronological decoding restores a boundary from the anchor's complete
+    state instead (:func:`restore`).
+
+    Parameters
+    ----------
+    inst : Instance
+    n : int
+    every : int
+
+    Returns
+    -------
+    Snaps
+        Every field but ``ok`` has no columns.
+    """
+    rows = n // max(every, 1) + 1
+    st = inst.new_state()
+    fields: list[Any] = [
+        np.zeros((rows, *(0 for _ in np.shape(x))), dtype=np.asarray(x).dtype) for x in st
+    ]
+    fields.append(np.zeros(rows, dtype=np.bool_))
+    return Snaps._make(fields)
+
+
+@njit(cache=True)
+def _restore(d, root, fin, keep, st):
+    """``st`` := ``root`` plus the intervals of the tasks ``keep`` marks in
+    ``fin`` (:func:`restore`)."""
+    A = d.arm_lo.shape[0]
+    T = fin.t_start.shape[0]
+    has = np.zeros(A, dtype=np.bool_)
+    last = root.t_last[0]
+    for t in range(T):
+        if keep[t]:
+            st.t_start[t] = fin.t_start[t]
+            st.t_end[t] = fin.t_end[t]
+            st.t_mode[t] = fin.t_mode[t]
+            st.t_waits[t] = fin.t_waits[t]
+            has[d.mode_arm[fin.t_mode[t]]] = True
+            if root.t_mode[t] < 0 and fin.t_start[t] > last:
+                last = fin.t_start[t]
+        else:
+            st.t_start[t] = np.nan
+            st.t_end[t] = np.nan
+            st.t_mode[t] = -1
+    st.t_last[0] = last
+    for a in range(A):
+        lo = d.arm_lo[a]
+        n = 0
+        for i in range(lo, lo + fin.arm_n[a]):
+            x = fin.arm_t[i]
+            if keep[x]:
+                st.arm_t[lo + n] = x
+                n += 1
+        st.arm_n[a] = n
+    for r in range(d.res_lo.shape[0]):
+        lo = d.res_lo[r]
+        n = 0
+        j = lo
+        for i in range(lo, lo + fin.res_n[r]):
+            x = fin.tl_task[i]
+            e = fin.tl_e[i]
+            if x >= 0:
+                if not keep[x]:
+                    continue
+            else:
+                # a start zone: left where the arm's first task left it, or as
+                # in the root while the arm has none (chronological decoding
+                # moves it once, for the arm's first task)
+                while root.tl_task[j] >= 0:
+                    j += 1
+                if not has[fin.tl_own[i]]:
+                    e = root.tl_e[j]
+                j += 1
+            st.tl_s[lo + n] = fin.tl_s[i]
+            st.tl_e[lo + n] = e
+            st.tl_own[lo + n] = fin.tl_own[i]
+            st.tl_task[lo + n] = x
+            n += 1
+        st.res_n[r] = n
+
+
+def restore(
+    inst: Instance, root: State, final: State, order: IntArray, upto: int, state: State
+) -> State:
+    """The state of a chronological list decode after its first ``upto``
+    positions, from its complete state: what a snapshot would hold.
+
+    Chronological decoding appends every task to its arm and inserts its
+    intervals into the timelines in start order (equal starts keep their
+    order), so the state after a prefix of the list is the complete state
+    less the intervals and arm slots of the later tasks; the one value a
+    later task changes in place, the end of its arm's start-zone interval
+    (its first task leaves the start zone), comes from ``root`` while the
+    arm has no task in the prefix. ``upto`` must be a boundary where no task
+    was carried over (a snapshot's ``ok``).
+
+    Parameters
+    ----------
+    inst : Instance
+    root : State
+        The state the decode started from (tasks placed before the list).
+    final : State
+        The complete state of decoding ``order`` from ``root``, chronologically.
+    order : (n,) int
+    upto : int
+        Positions kept.
+    state : State
+        Overwritten with the result (every field an array of ``root``'s shape).
+
+    Returns
+    -------
+    State
+        ``state``.
+    """
+    keep = root.t_mode >= 0
+    keep[np.asarray(order[:upto], dtype=np.int64)] = True
+    _restore(inst.data, root, final, keep, state)
+    return state
 
 
 def copy_rows(src: Snaps, dst: Snaps, lo: int, hi: int) -> None:
@@ -236,6 +369,7 @@ def decode_resume(
     release: FloatArray | None = None,
     allowed: Any = None,
     arm_lb: FloatArray | None = None,
+    states: bool = True,
 ) -> tuple[int, State]:
     """Decode ``order`` in chunks, resuming from snapshot ``k_from`` of ``src``.
 
@@ -261,6 +395,11 @@ def decode_resume(
         by the snapshot (default: a new state).
     chrono, waits, blocking, release, allowed, arm_lb
         As for :func:`~scheduler.kernel.decode`.
+    states : bool
+        Whether the snapshots hold states (saved and loaded here). False:
+        ``src`` and ``out`` hold only the flags (:func:`new_flags`), and when
+        ``k_from >= 0`` ``state`` already holds boundary ``k_from``
+        (:func:`restore`, chronological decoding only).
 
     Returns
     -------
@@ -273,6 +412,8 @@ def decode_resume(
     UsageError
         Blocking asked of a problem without an oracle.
     """
+    if not states and k_from >= 0 and state is None:
+        raise UsageError("decode_resume: without saved states, pass the restored state")
     st = inst.new_state() if state is None else state
     has = inst.problem.blocking is not None
     if blocking and not has:
@@ -307,6 +448,7 @@ def decode_resume(
                 buf,
                 outer,
                 inner,
+                states,
             )
         )
         if code != RESUME:
