@@ -5,15 +5,18 @@ from __future__ import annotations
 import sys
 
 from benchmarks import (
+    bench_bounds,
     bench_cells,
     bench_fjsp,
     bench_generated,
     bench_geometry,
+    bench_grid,
     bench_kernel,
     bench_lines,
     bench_network,
     bench_oracle,
     bench_outside,
+    bench_policies,
     bench_resolve,
     bench_resolve_loop,
     bench_scale,
@@ -24,6 +27,7 @@ from benchmarks import (
     bench_sweep,
     bench_urdf,
     bench_zones,
+    gap_anatomy,
 )
 
 
@@ -35,13 +39,17 @@ def main() -> None:
         bench_zones,
         bench_geometry,
         bench_cells,
+        bench_grid,
         bench_urdf,
         bench_resolve,
         bench_resolve_loop,
         bench_sim,
+        bench_policies,
         bench_simkernel,
         bench_network,
         bench_scale,
+        gap_anatomy,
+        bench_bounds,
         bench_generated,
         bench_setups,
         bench_lines,
