@@ -59,6 +59,7 @@ from scheduler.start import begin
 
 __all__ = [
     "add_arm_sequences",
+    "add_relaxed_tasks",
     "arrival_heads",
     "build_model",
     "cpsat_bound",
@@ -796,6 +797,49 @@ def add_arm_sequences(
         arcs.append((0, 0, mdl.new_bool_var("")))
         mdl.add_circuit(arcs)
     return first
+
+
+def add_relaxed_tasks(
+    mdl: Any, p: Problem, to_units: Callable[[float], int], H: int
+) -> tuple[list[Any], list[Any], dict[int, Any], dict[int, Any], list[Any]]:
+    """The tasks of a relaxation: each may last longer than its modes.
+
+    One interval ``[S_t, E_t)`` per task, at least its chosen mode's
+    duration long (an arm may wait anywhere inside it), starting no earlier
+    than its release and :func:`arrival_heads`, after its predecessors'
+    ends; one optional interval per mode. ``to_units`` rounds down (every
+    valid schedule's image is a solution). Shared by the overlap and the
+    busy-resources relaxations.
+
+    Returns
+    -------
+    tuple
+        ``S``, ``E`` (per task), ``X`` (mode -> literal), the mode intervals
+        (mode -> interval) and the task intervals.
+    """
+    T = p.n_tasks
+    dur = [to_units(float(d)) for d in p.mode_duration]
+    arrive = arrival_heads(p)
+    S = [mdl.new_int_var(to_units(float(p.task_release[t])), H, f"S{t}") for t in range(T)]
+    E = [mdl.new_int_var(0, H, f"E{t}") for t in range(T)]
+    X: dict[int, Any] = {}
+    iv: dict[int, Any] = {}
+    master = []
+    for t in range(T):
+        size = mdl.new_int_var(0, H, f"D{t}")
+        master.append(mdl.new_interval_var(S[t], size, E[t], f"T{t}"))
+        lits = []
+        for m in p.task_modes[t]:
+            x = mdl.new_bool_var(f"x{m}")
+            X[m] = x
+            lits.append(x)
+            mdl.add(size >= dur[m]).only_enforce_if(x)
+            mdl.add(S[t] >= to_units(float(arrive[m]))).only_enforce_if(x)
+            iv[m] = mdl.new_optional_interval_var(S[t], size, E[t], x, f"I{m}")
+        mdl.add_exactly_one(lits)
+        for q in p.task_preds[t]:
+            mdl.add(S[t] >= E[q])
+    return S, E, X, iv, master
 
 
 def arrival_heads(p: Problem) -> FloatArray:

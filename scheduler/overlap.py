@@ -65,7 +65,7 @@ import numpy as np
 from multiarm.types import FloatArray
 from scheduler.cpsat import (
     add_arm_sequences,
-    arrival_heads,
+    add_relaxed_tasks,
     cpsat_bound,
     essential_resources,
     resource_windows,
@@ -311,28 +311,8 @@ def overlap_model(
 
     T = p.n_tasks
     H = math.ceil(horizon * scale * 1.02) + 10
-    dur = [fl(float(d)) for d in p.mode_duration]
-    arrive = arrival_heads(p)
     mdl = cp_model.CpModel()
-    S = [mdl.new_int_var(fl(float(p.task_release[t])), H, f"S{t}") for t in range(T)]
-    E = [mdl.new_int_var(0, H, f"E{t}") for t in range(T)]
-    X: dict[int, Any] = {}
-    iv: dict[int, Any] = {}
-    master = []
-    for t in range(T):
-        size = mdl.new_int_var(0, H, f"D{t}")
-        master.append(mdl.new_interval_var(S[t], size, E[t], f"T{t}"))
-        lits = []
-        for m in p.task_modes[t]:
-            x = mdl.new_bool_var(f"x{m}")
-            X[m] = x
-            lits.append(x)
-            mdl.add(size >= dur[m]).only_enforce_if(x)
-            mdl.add(S[t] >= fl(float(arrive[m]))).only_enforce_if(x)
-            iv[m] = mdl.new_optional_interval_var(S[t], size, E[t], x, f"I{m}")
-        mdl.add_exactly_one(lits)
-        for q in p.task_preds[t]:
-            mdl.add(S[t] >= E[q])
+    S, E, X, iv, master = add_relaxed_tasks(mdl, p, fl, H)
     add_arm_sequences(mdl, p, iv, X, S, E, fl)
     # tools are held from start to end, waits included: a no-overlap each
     tools: dict[int, list[Any]] = {}

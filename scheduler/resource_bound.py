@@ -55,6 +55,7 @@ import numpy as np
 from multiarm.errors import UsageError
 from scheduler.cpsat import (
     add_arm_sequences,
+    add_relaxed_tasks,
     cpsat_bound,
     essential_resources,
     resource_windows,
@@ -126,33 +127,10 @@ def busy_resources_model(
     def fl(x: float) -> int:
         return math.floor(x * scale + 1e-9)
 
-    from scheduler.bounds import min_incoming_setup
-
     T = p.n_tasks
     H = math.ceil(horizon * scale * 1.02) + 10
-    dur = [fl(float(d)) for d in p.mode_duration]
-    # an arm is available, then travels into each task (from its initial pose or a task)
-    arrive = p.arm_available[p.mode_arm] + min_incoming_setup(p)
     mdl = cp_model.CpModel()
-    S = [mdl.new_int_var(fl(float(p.task_release[t])), H, f"S{t}") for t in range(T)]
-    E = [mdl.new_int_var(0, H, f"E{t}") for t in range(T)]
-    X: dict[int, Any] = {}
-    iv: dict[int, Any] = {}
-    master = []
-    for t in range(T):
-        size = mdl.new_int_var(0, H, f"D{t}")
-        master.append(mdl.new_interval_var(S[t], size, E[t], f"T{t}"))
-        lits = []
-        for m in p.task_modes[t]:
-            x = mdl.new_bool_var(f"x{m}")
-            X[m] = x
-            lits.append(x)
-            mdl.add(size >= dur[m]).only_enforce_if(x)
-            mdl.add(S[t] >= fl(float(arrive[m]))).only_enforce_if(x)
-            iv[m] = mdl.new_optional_interval_var(S[t], size, E[t], x, f"I{m}")
-        mdl.add_exactly_one(lits)
-        for q in p.task_preds[t]:
-            mdl.add(S[t] >= E[q])
+    S, E, X, iv, master = add_relaxed_tasks(mdl, p, fl, H)
     if travel:
         add_arm_sequences(mdl, p, iv, X, S, E, fl)
     else:
