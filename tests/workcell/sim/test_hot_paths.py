@@ -170,3 +170,116 @@ def test_zone_uses_are_the_array_computation(scara4: Any, scara4_plan: Any) -> N
                 assert got == _plain_uses(windows, rec, t_end)
                 seen += len(got)
     assert seen > 0
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_first_touch_is_the_plain_loop_over_poses(seed: int) -> None:
+    from workcell.geometry._zone_sweep_jit import capsules_touch
+    from workcell.sim.coordination.guard import _first_touch
+
+    rng = np.random.default_rng(seed)
+    n, m, sa, sb = (int(x) for x in rng.integers(1, 12, size=4))
+    a0, a1 = rng.uniform(-1, 1, size=(2, n, sa, 3))
+    b0, b1 = rng.uniform(-1, 1, size=(2, m, sb, 3))
+    ra, rb = rng.uniform(0.0, 0.15, size=sa), rng.uniform(0.0, 0.15, size=sb)
+    box = _swept_box(a0, a1, float(ra.max()) + 0.02)
+    lo = np.minimum(b0.min(axis=1), b1.min(axis=1)) - rb.max()
+    hi = np.maximum(b0.max(axis=1), b1.max(axis=1)) + rb.max()
+    boxes = np.ascontiguousarray(np.concatenate([lo, hi], axis=1))
+    # the plain loop: every pose whose box meets, in order, with its samples
+    want = []
+    for j in range(m):
+        if (boxes[j, :3] <= box[3:]).all() and (boxes[j, 3:] >= box[:3]).all():
+            hit = capsules_touch(a0, a1, ra, b0[j], b1[j], rb, 0.02)
+            if hit.any():
+                want.append((j, hit))
+    got = []
+    j = 0
+    while True:
+        j, hit = _first_touch(a0, a1, ra, box, b0, b1, boxes, rb, 0.02, j)
+        if j < 0:
+            break
+        got.append((j, hit))
+        j += 1
+    assert [j for j, _h in got] == [j for j, _h in want]
+    assert all(np.array_equal(h, w) for (_j, h), (_k, w) in zip(got, want, strict=True))
+
+
+class _Piped:
+    """The pipeline's part of an arm controller (S2.3), stepped by hand."""
+
+    def __init__(self, offset: int, period: float) -> None:
+        from workcell.arms.profiles import ServoDrive
+        from workcell.arms.trajectory import JointTrajectory
+
+        drives = (ServoDrive(1.0, 2.0), ServoDrive(1.0, 2.0))
+        path = np.array([[0.0, 0.0], [0.5, -1.0], [2.0, 1.0]])
+
+        class _Leg:
+            trajectory = JointTrajectory.from_waypoints(drives, path, "sync")
+
+        self.leg: Any = _Leg()
+        self.period = period
+        self.lookahead = offset * period
+        self.now = 0.0
+        self._ring = np.zeros((offset + 2, 2))
+        self._chunk = np.zeros((0, 2))
+        self._chunk_i = self._chunk_at = self._chunk_done = self._pipe_i = 0
+        self.points_checked = 0
+
+    def current_tau(self) -> float:
+        return self.now
+
+
+@pytest.mark.parametrize("offset", [1, 5, 70, 132])
+def test_the_ring_filled_a_chunk_at_a_time_is_the_ring_filled_every_tick(offset: int) -> None:
+    from workcell.sim.control.pipeline import flush_ring, pipeline_step, ring_points
+
+    rng = np.random.default_rng(offset)
+    fast = _Piped(offset, 1e-3)
+    ring = np.zeros_like(fast._ring)  # the reference: one point written per tick
+    chunk = np.zeros((0, 2))
+    ci = pi = 0
+    for _ in range(600):
+        if rng.random() < 0.02:  # a new departure: the points are computed again
+            flush_ring(fast)
+            fast._chunk_i = fast._chunk_done = len(fast._chunk)
+            ci = len(chunk)
+        if ci >= len(chunk):
+            taus = fast.now + fast.lookahead + fast.period * np.arange(64, dtype=np.float64)
+            chunk = fast.leg.trajectory.sample(taus)
+            ci = 0
+        ring[pi % len(ring)] = chunk[ci]
+        ci += 1
+        pi += 1
+        pipeline_step(fast)
+        fast.now += 1e-3
+        if rng.random() < 0.05:  # read now and then
+            assert np.array_equal(ring_points(fast), ring)
+    assert np.array_equal(ring_points(fast), ring)
+    assert fast.points_checked == pi
+
+
+def test_the_trace_writes_a_message_detail_when_it_is_read() -> None:
+    from workcell.sim.events.trace import Trace
+
+    described: list[object] = []
+
+    def describe(payload: object) -> str:
+        described.append(payload)
+        return f"payload {payload}"
+
+    tr = Trace()
+    tr.add(2.0, "sleep", arm="a", detail="held")
+    tr.row_described(1.0, "message", "a", "zone_request", 1, 0, 51, 0.001, describe, 7)
+    tr.add(0.5, "wake", arm="b")
+    assert described == []  # nothing written while the run appends
+    assert (tr.count("sleep"), tr.count("message"), len(tr)) == (1, 1, 3)
+    assert [e.kind for e in tr.select(("wake", "sleep"))] == ["sleep", "wake"]
+    assert described == []
+    tr.sort()
+    assert [(e.time, e.kind) for e in tr] == [(0.5, "wake"), (1.0, "message"), (2.0, "sleep")]
+    assert tr[1].detail == "payload 7" and tr[1].message == "zone_request"
+    assert described == [7]  # written once
+    tr.add(0.1, "fault")
+    assert tr[-1].time == 0.1 and len(tr) == 4 and described == [7]

@@ -179,3 +179,57 @@ def test_realtime_does_not_sleep_when_behind() -> None:
     k.schedule(2.0, slow)
     k.run(realtime=1.0)
     assert fc.sleeps == [1.0]
+
+
+def _periodic(k: EventLoop, period: float, times: list[float], inline: bool) -> None:
+    """A periodic process (as the controllers' tick loop): every ``period``,
+    the next period inline when the loop allows it (``inline``)."""
+
+    def tick(n: int) -> None:
+        times.append(k.now)
+        if n == 0:
+            return
+        t = k.now + period
+        if not (inline and k.advance(t)):
+            k.schedule(t, tick, n - 1, absolute=True)
+            return
+        tick(n - 1)
+
+    k.schedule(0.0, tick, 20)
+
+
+def test_advance_runs_the_next_period_inline_only_when_nothing_else_is_due() -> None:
+    for inline in (False, True):
+        k = EventLoop()
+        ticks: list[float] = []
+        others: list[tuple[float, float]] = []
+        _periodic(k, 0.25, ticks, inline)
+        # callbacks between, at and (with a higher priority) before ticks
+        k.schedule(1.1, lambda: others.append((k.now, ticks[-1])))
+        k.schedule(2.0, lambda: others.append((k.now, ticks[-1])))
+        k.schedule(3.0, lambda: others.append((k.now, ticks[-1])), priority=-1)
+        k.run()
+        # the same order either way: a callback due at a tick's time runs first
+        # (it was scheduled before the tick), and one of a higher priority too
+        assert ticks == [0.25 * i for i in range(21)]
+        assert others == [(1.1, 1.0), (2.0, 1.75), (3.0, 2.75)]
+        assert k.now == 5.0
+        # inline periods are not callbacks of the loop: inline, the ticks at
+        # 0, 1.25, 2.0 and 3.0 are (each the first after another callback)
+        assert k.events_run == (21 + 3 if not inline else 4 + 3)
+
+
+def test_advance_refuses_past_until_paced_or_outside_a_run() -> None:
+    k = EventLoop()
+    assert not k.advance(1.0)  # not running
+    got: list[bool] = []
+    k.schedule(1.0, lambda: got.append(k.advance(1.5)))  # beyond until
+    k.schedule(1.2, lambda: got.append(k.advance(1.3)))  # within: moves
+    k.run(until=1.4)
+    assert got == [False, True]
+    assert k.now == 1.4
+    fc = FakeClock()
+    paced = EventLoop(clock=fc.clock, sleep=fc.sleep)
+    paced.schedule(1.0, lambda: got.append(paced.advance(1.5)))
+    paced.run(realtime=1.0)
+    assert got[-1] is False and paced.now == 1.0

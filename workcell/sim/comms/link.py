@@ -179,18 +179,17 @@ class Link:
         delay = t - frame.send_time
         self.delays.append(delay)
         src = frame.src
-        self.trace.row(
+        self.trace.row_described(
             t,
             "message",
             self._arm_of(src, station),
-            "",
-            "",
             frame.kind,
             src,
             station,
             frame.size,
             delay,
-            describe_payload(payload),
+            describe_payload,
+            payload,
         )
         rx = self.receivers.get(station)
         if rx is not None:

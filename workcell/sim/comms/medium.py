@@ -191,6 +191,21 @@ class Frame:
         if self.dst == self.src:
             raise ValidationError(f"Frame {self.kind!r}: src and dst are both {self.src}")
 
+    def with_payload(self, payload: object) -> Frame:
+        """This frame carrying ``payload`` instead (same id, number and send
+        time): ``dataclasses.replace(frame, payload=...)`` without its cost."""
+        return Frame(
+            self.src,
+            self.dst,
+            self.size,
+            self.kind,
+            self.priority,
+            payload,
+            self.send_time,
+            self.frame_id,
+            self.seq,
+        )
+
 
 ReceiveCallback = Callable[[Frame, float], object]
 """``receiver(frame, time)``: called at the delivery time."""

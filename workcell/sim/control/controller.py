@@ -51,8 +51,10 @@ from workcell.sim.control.force import (
 from workcell.sim.control.pipeline import (
     INTERNAL_MESSAGES,
     Ticker,
+    flush_ring,
     pipeline_offset,
     pipeline_step,
+    ring_points,
     stop_time,
 )
 from workcell.sim.events.loop import EventLoop, Handle
@@ -154,7 +156,7 @@ class ArmController:
         self.period = float(period)
         self.offset = pipeline_offset(arm.drives, self.period)
         self.lookahead = self.offset * self.period
-        self.ring = np.zeros((self.offset + 2, arm.dof))
+        self._ring = np.zeros((self.offset + 2, arm.dof))
         self.ticker = ticker
         self.q = np.array(q0, dtype=float)  # commanded joints when idle
         self.home_q = self.q.copy()
@@ -194,6 +196,8 @@ class ArmController:
         self.border_wait = 0.0
         self._chunk: FloatArray = np.zeros((0, arm.dof))
         self._chunk_i = 0
+        self._chunk_at = 0  # the pipeline index of the chunk's first point
+        self._chunk_done = 0  # the chunk's points already in the ring
         self._pipe_i = 0
         self.away: Excursion | None = None  # where it left its leg for an excursion
         self.channel = channel
@@ -299,7 +303,8 @@ class ArmController:
         else:
             self._report(True)
         if self.ticker is not None:
-            self._chunk_i = len(self._chunk)  # recompute the pipeline's points
+            flush_ring(self)  # the points taken so far into the ring; recompute the rest
+            self._chunk_i = self._chunk_done = len(self._chunk)
             self.ticker.wake()
         self._plan_next()
 
@@ -570,6 +575,12 @@ class ArmController:
 
     # pipeline
     pipeline_step = pipeline_step
+
+    @property
+    def ring(self) -> FloatArray:
+        """The S2.3 ring buffer: the pipeline's last ``offset + 2`` points
+        (point ``i`` at slot ``i % (offset + 2)``; zeros at event level)."""
+        return ring_points(self)
 
     # mailbox
     internal = mailbox.internal

@@ -40,6 +40,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from multiarm.errors import ValidationError
+from multiarm.types import FloatArray
 from workcell.arms.profiles import Drive, ServoDrive, StepperDrive
 from workcell.sim.events.loop import EventLoop, Handle
 
@@ -58,7 +59,15 @@ class Stepped(Protocol):
         """One sampling period of the pipeline."""
 
 
-__all__ = ["INTERNAL_MESSAGES", "Ticker", "pipeline_offset", "pipeline_step", "stop_time"]
+__all__ = [
+    "INTERNAL_MESSAGES",
+    "Ticker",
+    "flush_ring",
+    "pipeline_offset",
+    "pipeline_step",
+    "ring_points",
+    "stop_time",
+]
 
 
 INTERNAL_MESSAGES: tuple[str, ...] = (
@@ -116,8 +125,10 @@ def pipeline_offset(drives: Sequence[Drive], period: float) -> int:
 
 
 class Ticker:
-    """The sampling-period loop (S2.2, S2.3): one kernel event per tick while
-    any arm moves, running every moving arm's compute/check/execute step.
+    """The sampling-period loop (S2.2, S2.3): every tick while any arm
+    moves, running every moving arm's compute/check/execute step (the ticks
+    between two other callbacks in one kernel callback:
+    :meth:`~workcell.sim.events.loop.EventLoop.advance`).
 
     Parameters
     ----------
@@ -141,32 +152,69 @@ class Ticker:
             self._handle = self.kernel.schedule(k * self.period, self._tick, k, absolute=True)
 
     def _tick(self, k: int) -> None:
+        # the ticks up to the next other callback run here, one after the
+        # other (EventLoop.advance), the rest through the heap
         self._handle = None
-        any_moving = False
-        for arm in self.arms:
-            if arm.running:
-                arm.pipeline_step()
-                any_moving = True
-        if any_moving:
+        arms = self.arms
+        kernel = self.kernel
+        period = self.period
+        while True:
+            any_moving = False
+            for arm in arms:
+                if arm.running:
+                    arm.pipeline_step()
+                    any_moving = True
+            if not any_moving:
+                return
             self.ticks += 1
-            self._handle = self.kernel.schedule(
-                (k + 1) * self.period, self._tick, k + 1, absolute=True
-            )
+            k += 1
+            if not kernel.advance(k * period):
+                self._handle = kernel.schedule(k * period, self._tick, k, absolute=True)
+                return
 
 
 def pipeline_step(self: _Self) -> None:
     """One sampling period (S2.3): compute point i, check point i - 1,
-    execute point i - offset (the ring buffer holds offset + 2 points)."""
+    execute point i - offset (the ring buffer holds offset + 2 points).
+
+    The points are computed a chunk at a time (one trajectory sample call
+    for the next 64 ticks) and enter the ring buffer when a chunk is done or
+    the ring is read (:func:`ring_points`): per tick, only the pipeline's
+    counters move."""
     leg = self.leg
     if leg is None:
         return
-    if self._chunk_i >= len(self._chunk):
+    i = self._chunk_i
+    if i >= len(self._chunk):
+        flush_ring(self)
         tau = self.current_tau() + self.lookahead
-        taus = tau + self.period * np.arange(64, dtype=np.float64)
-        self._chunk = leg.trajectory.sample(taus)
-        self._chunk_i = 0
-    i = self._pipe_i
-    self.ring[i % len(self.ring)] = self._chunk[self._chunk_i]
-    self._chunk_i += 1
-    self._pipe_i = i + 1
+        self._chunk = leg.trajectory.sample(tau + self.period * np.arange(64, dtype=np.float64))
+        self._chunk_at = self._pipe_i
+        self._chunk_done = 0
+        i = 0
+    self._chunk_i = i + 1
+    self._pipe_i += 1
     self.points_checked += 1
+
+
+def flush_ring(self: _Self) -> None:
+    """Put the points computed since the last flush into the ring buffer
+    (point ``j`` at slot ``j % len(ring)``), as the ticks would have one by one."""
+    ring = self._ring
+    size = len(ring)
+    done = self._chunk_done
+    upto = min(self._chunk_i, len(self._chunk))
+    if upto <= done:
+        return
+    lo = max(done, upto - size)  # earlier points are overwritten anyway
+    j = self._chunk_at + np.arange(lo, upto)
+    ring[j % size] = self._chunk[lo:upto]
+    self._chunk_done = upto
+
+
+def ring_points(self: _Self) -> FloatArray:
+    """The ring buffer (offset + 2 points, point ``i`` at slot ``i % len``) as
+    the ticks so far have filled it."""
+    flush_ring(self)
+    ring: FloatArray = self._ring
+    return ring

@@ -12,7 +12,6 @@ Functions here are methods of :class:`~workcell.sim.coordination.centralized.Coo
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -74,7 +73,7 @@ def on_report(self: _Self, a: int, report: Report, taken: int = -1) -> None:
         if go and self.guard is not None:
             # reserved from now until the arm's report acknowledges the answer
             seq = self.channel.next_order(a)
-            self.cleared[a].append((seq, replace(report.view, running=True)))
+            self.cleared[a].append((seq, report.view.as_running()))
         self.channel.order(a, Departure(go, report.ask))
     elif isinstance(report, TaskStarted):
         self.task_started(a, report.task, report.time)

@@ -46,6 +46,39 @@ def _swept_box(p0: FloatArray, p1: FloatArray, grow: float) -> FloatArray:
     return out
 
 
+@njit(cache=True)
+def _first_touch(
+    a0: FloatArray,
+    a1: FloatArray,
+    ra: FloatArray,
+    box: FloatArray,
+    b0: FloatArray,
+    b1: FloatArray,
+    boxes: FloatArray,
+    rb: FloatArray,
+    padding: float,
+    j0: int,
+) -> tuple[int, Any]:
+    """The first pose ``j >= j0`` of the other arm (capsule end points ``b0,
+    b1`` (M, S, 3), boxes (M, 6)) whose box meets the mover's swept ``box``
+    (6,) and which some sample of the mover (``a0, a1`` (N, S, 3)) touches
+    (:func:`~workcell.geometry._zone_sweep_jit.capsules_touch`), with the
+    samples that touch it ((N,) bool); ``(-1, empty)`` if none."""
+    for j in range(j0, boxes.shape[0]):
+        if (
+            boxes[j, 0] <= box[3]
+            and boxes[j, 1] <= box[4]
+            and boxes[j, 2] <= box[5]
+            and boxes[j, 3] >= box[0]
+            and boxes[j, 4] >= box[1]
+            and boxes[j, 5] >= box[2]
+        ):
+            hit = capsules_touch(a0, a1, ra, b0[j], b1[j], rb, padding)
+            if hit.any():
+                return j, hit
+    return -1, np.zeros(0, dtype=np.bool_)
+
+
 class GeometryGuard:
     """The coordinator's geometric check (S2.6, S2.12) before an arm moves.
 
@@ -108,8 +141,10 @@ class GeometryGuard:
             )
             self._frames_of.append((idx, np.ascontiguousarray(hw)))
         self._reach = [float(r.max()) if len(r) else 0.0 for _l, r in self.capsules]
+        self._radii = [np.ascontiguousarray(r, dtype=float) for _l, r in self.capsules]
         self._boxes: dict[int, tuple[FloatArray, Any, tuple[float, ...]]] = {}
         self._segments: dict[tuple[int, int, float], tuple[Any, Any]] = {}
+        self._standing: dict[tuple[int, int, float], tuple[Any, Any]] = {}
         self.world = CollisionWorld()
         for arm, q in zip(cell.arms, cell.start, strict=True):
             self.world.add_arm(arm, q=q, padding=self.padding / 2)
@@ -210,7 +245,7 @@ class GeometryGuard:
         a0, a1 = self._ends(mover.index, qa)
         a0 = np.ascontiguousarray(a0)
         a1 = np.ascontiguousarray(a1)
-        ra = np.ascontiguousarray(self.capsules[mover.index][1], dtype=float)
+        ra = self._radii[mover.index]
         out: list[int] = []
         reach = self._reach[mover.index] + self.padding
         box = _swept_box(a0, a1, reach)
@@ -218,20 +253,16 @@ class GeometryGuard:
             if other.index in out:
                 continue
             qb, b0, b1, boxes = self._poses(other)
-            rb = np.ascontiguousarray(self.capsules[other.index][1], dtype=float)
-            keep = np.flatnonzero(
-                (boxes[:, 0] <= box[3])
-                & (boxes[:, 1] <= box[4])
-                & (boxes[:, 2] <= box[5])
-                & (boxes[:, 3] >= box[0])
-                & (boxes[:, 4] >= box[1])
-                & (boxes[:, 5] >= box[2])
-            )
-            for j in keep.tolist():
-                hit = capsules_touch(a0, a1, ra, b0[j], b1[j], rb, self.padding)
-                if hit.any() and self._confirm(mover.index, qa[hit], other.index, qb[j]):
+            rb = self._radii[other.index]
+            j = 0
+            while True:
+                j, hit = _first_touch(a0, a1, ra, box, b0, b1, boxes, rb, self.padding, j)
+                if j < 0:
+                    break
+                if self._confirm(mover.index, qa[hit], other.index, qb[j]):
                     out.append(other.index)
                     break
+                j += 1
         return out
 
     def _poses(self, view: ArmView) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
@@ -242,8 +273,19 @@ class GeometryGuard:
         leg, start and station)."""
         leg = view.leg
         if leg is None or not view.running:
+            # standing: at ``q`` (idle) or at ``tau`` on its leg (cached per place)
+            where: Any = view.q if leg is None else leg
+            skey = (view.index, id(where), -1.0 if leg is None else view.tau)
+            got = self._standing.get(skey)
+            if got is not None and got[0] is where:
+                standing: tuple[FloatArray, FloatArray, FloatArray, FloatArray] = got[1]
+                return standing
             q = view.q[None, :] if leg is None else leg.trajectory.sample(np.array([view.tau]))
-            return self._pose_set(view.index, q)
+            out = self._pose_set(view.index, q)
+            if len(self._standing) > 4096:
+                self._standing.clear()
+            self._standing[skey] = (where, out)
+            return out
         key = (id(leg), view.k, view.tau)
         got = self._segments.get(key)
         if got is not None and got[0] is leg:

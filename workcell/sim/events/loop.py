@@ -252,7 +252,7 @@ class EventLoop:
         How many callbacks have run (work counter, for tests and benchmarks).
     """
 
-    __slots__ = ("_clock", "_heap", "_now", "_seq", "_sleep", "events_run")
+    __slots__ = ("_clock", "_heap", "_limit", "_now", "_paced", "_seq", "_sleep", "events_run")
 
     def __init__(
         self,
@@ -268,6 +268,8 @@ class EventLoop:
         self._clock = clock
         self._sleep = sleep
         self.events_run = 0
+        self._limit = -math.inf  # while running: the run's ``until`` (inf: none)
+        self._paced = False  # while running: paced against the wall clock
 
     @property
     def now(self) -> float:
@@ -379,6 +381,29 @@ class EventLoop:
             heapq.heappop(heap)
         return heap[0][0] if heap else math.inf
 
+    def advance(self, t: float) -> bool:
+        """Move the clock to ``t`` from inside a callback, as if a callback
+        scheduled now for ``t`` ran next: only when no other callback is due
+        at or before ``t``, ``t`` is within the run's ``until`` and the run is
+        not paced against the wall clock. A periodic process (the
+        controllers' tick loop) runs its next period at once this way
+        instead of through the heap; it does not count in :attr:`events_run`.
+
+        Parameters
+        ----------
+        t : float
+            Seconds, >= now.
+
+        Returns
+        -------
+        bool
+            Whether the clock moved (else it is unchanged: schedule instead).
+        """
+        if self._paced or not (self._now <= t <= self._limit) or self.peek() <= t:
+            return False
+        self._now = t
+        return True
+
     def run(self, until: float | None = None, realtime: float | None = None) -> None:
         """Run callbacks in time order.
 
@@ -414,6 +439,8 @@ class EventLoop:
         collecting = gc.isenabled()
         if collecting:
             gc.disable()
+        self._limit = limit
+        self._paced = realtime is not None
         try:
             while heap:
                 t, _, _, h = heap[0]
@@ -435,6 +462,8 @@ class EventLoop:
                     h[3]()
         finally:
             self.events_run += n
+            self._limit = -math.inf
+            self._paced = False
             if collecting:
                 gc.enable()
         if until is not None:

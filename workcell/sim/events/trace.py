@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Collection, Iterator
 from dataclasses import asdict, dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -126,13 +126,50 @@ def _jsonable(x: float) -> float | str:
     return "inf" if x > 0 else ("-inf" if x < 0 else "nan")
 
 
-class Trace:
-    """An ordered list of :class:`TraceEvent` (module docstring)."""
+class _Described:
+    """A detail text written when the trace is read: ``describe(payload)``
+    (the hot paths record a frame's payload, a frozen record, and the text is
+    made once, on the first read)."""
 
-    __slots__ = ("_events",)
+    __slots__ = ("describe", "payload")
+
+    def __init__(self, describe: Callable[[Any], str], payload: Any) -> None:
+        self.describe = describe
+        self.payload = payload
+
+
+_Row = tuple[float, str, str, str, str, str, int, int, int, float, "str | _Described"]
+
+
+def _record(r: _Row) -> TraceEvent:
+    """The :class:`TraceEvent` of a row (its detail written now if it is deferred)."""
+    detail = r[10]
+    text = detail if isinstance(detail, str) else str(detail.describe(detail.payload))
+    return TraceEvent(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9], text)
+
+
+class Trace:
+    """An ordered list of :class:`TraceEvent` (module docstring).
+
+    Records are kept as plain rows while a run appends them (a hot path) and
+    become :class:`TraceEvent` objects, each once, when the trace is first
+    read."""
+
+    __slots__ = ("_events", "_rows")
 
     def __init__(self, events: list[TraceEvent] | None = None) -> None:
+        self._rows: list[_Row] = []
         self._events: list[TraceEvent] = list(events or [])
+
+    def _settled(self) -> list[TraceEvent]:
+        """Every record as a :class:`TraceEvent` (the rows appended since the
+        last read made into records now)."""
+        rows = self._rows
+        if rows:
+            out = self._events
+            out.extend(map(_record, rows))
+            rows.clear()
+        return self._events
 
     def add(
         self,
@@ -150,8 +187,8 @@ class Trace:
         detail: str = "",
     ) -> None:
         """Append one record (the arguments are :class:`TraceEvent`'s fields)."""
-        self._events.append(
-            TraceEvent(float(time), kind, arm, task, zone, message, src, dst, size, delay, detail)
+        self._rows.append(
+            (float(time), kind, arm, task, zone, message, src, dst, size, delay, detail)
         )
 
     def row(
@@ -170,32 +207,79 @@ class Trace:
     ) -> None:
         """Append one record from all its fields, in :class:`TraceEvent`'s
         order (what :meth:`add` does, without keywords: for the hot paths)."""
-        self._events.append(
-            TraceEvent(float(time), kind, arm, task, zone, message, src, dst, size, delay, detail)
+        self._rows.append(
+            (float(time), kind, arm, task, zone, message, src, dst, size, delay, detail)
+        )
+
+    def row_described(
+        self,
+        time: float,
+        kind: str,
+        arm: str,
+        message: str,
+        src: int,
+        dst: int,
+        size: int,
+        delay: float,
+        describe: Callable[[Any], str],
+        payload: Any,
+    ) -> None:
+        """Append a message record whose detail is ``describe(payload)``,
+        written when the trace is first read (``payload`` must not change:
+        the frozen message records)."""
+        self._rows.append(
+            (
+                float(time),
+                kind,
+                arm,
+                "",
+                "",
+                message,
+                src,
+                dst,
+                size,
+                delay,
+                _Described(describe, payload),
+            )
         )
 
     def __len__(self) -> int:
-        return len(self._events)
+        return len(self._events) + len(self._rows)
 
     def sort(self) -> None:
         """Order the records by time (stable: records of one instant keep
         the order they happened in)."""
-        self._events.sort(key=lambda e: e.time)
+        if self._events:
+            self._settled().sort(key=lambda e: e.time)
+        else:
+            self._rows.sort(key=lambda r: r[0])
 
     def __iter__(self) -> Iterator[TraceEvent]:
-        return iter(self._events)
+        return iter(self._settled())
 
     def __getitem__(self, i: int) -> TraceEvent:
-        return self._events[i]
+        return self._settled()[i]
 
     def of_kind(self, kind: str) -> list[TraceEvent]:
         """The records of one kind, in order."""
-        return [e for e in self._events if e.kind == kind]
+        return [e for e in self._settled() if e.kind == kind]
+
+    def select(self, kinds: Collection[str]) -> list[TraceEvent]:
+        """The records of the given kinds, in order (without making records
+        of the rest)."""
+        out = [e for e in self._events if e.kind in kinds]
+        out.extend(_record(r) for r in self._rows if r[1] in kinds)
+        return out
+
+    def count(self, kind: str) -> int:
+        """How many records are of ``kind`` (without making records of the rest)."""
+        n = sum(1 for r in self._rows if r[1] == kind)
+        return n + sum(1 for e in self._events if e.kind == kind)
 
     def to_records(self) -> list[dict[str, Any]]:
         """Plain dicts (JSON-ready; infinite times become strings)."""
         out = []
-        for e in self._events:
+        for e in self._settled():
             d = asdict(e)
             d["time"] = _jsonable(e.time)
             d["delay"] = _jsonable(e.delay)
@@ -206,7 +290,7 @@ class Trace:
         """A pandas DataFrame with the columns of :data:`COLUMNS`."""
         import pandas as pd
 
-        return pd.DataFrame([asdict(e) for e in self._events], columns=list(COLUMNS))
+        return pd.DataFrame([asdict(e) for e in self._settled()], columns=list(COLUMNS))
 
     def to_json(self, path: str | PathLike[str] | None = None) -> str:
         """The trace as JSON text (``{"format": "multiarm.trace/1", "events": [...]}``),

@@ -262,7 +262,7 @@ def build_result(
     # reservations executed
     res: list[dict[str, Any]] = []
     open_: dict[tuple[str, str, str, str], float] = {}
-    for e in trace:
+    for e in trace.select(("zone_enter", "zone_leave")):
         if e.kind == "zone_enter":
             kind = {"zone": "zone", "move": "move", "tool": "tool"}[e.detail]
             open_[(kind, e.zone, e.task, e.arm)] = e.time
@@ -298,8 +298,8 @@ def build_result(
         utilisation={n: (v / span if span > 0 else 0.0) for n, v in busy.items()},
         zone_wait=_merge([c.zone_wait for c in arms]),
         border_wait=float(sum(c.border_wait for c in arms)),
-        sleeps=sum(1 for e in trace if e.kind == "sleep"),
-        wakes=sum(1 for e in trace if e.kind == "wake"),
+        sleeps=trace.count("sleep"),
+        wakes=trace.count("wake"),
         detours=coord.detours,
         resolves=coord.resolves,
         resolve_latency=np.array(coord.resolve_latency, dtype=float),

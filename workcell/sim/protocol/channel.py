@@ -30,7 +30,7 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 from multiarm.errors import InternalError
@@ -259,7 +259,7 @@ class ControlChannel:
             if rx is not None:
                 rx(arm, record, env.taken)
         elif self._frames_rx is not None:
-            self._frames_rx(replace(frame, payload=(record, frame.payload[1])))  # type: ignore[index]
+            self._frames_rx(frame.with_payload((record, frame.payload[1])))  # type: ignore[index]
 
     def _arm(self, arm: int) -> Callable[[Any], None]:
         rx = self._arm_rx[arm]

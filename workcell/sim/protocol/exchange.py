@@ -149,6 +149,25 @@ class ArmView:
     pushing: bool = False
     failed: bool = False
 
+    def as_running(self, t_ref: float | None = None) -> ArmView:
+        """This view with its leg's clock running (from ``t_ref``, if given):
+        ``dataclasses.replace(view, running=True)`` without its cost (a hot path)."""
+        return ArmView(
+            self.index,
+            self.leg,
+            self.k,
+            self.tau,
+            self.t_ref if t_ref is None else t_ref,
+            True,
+            self.q,
+            self.at_station,
+            self.held,
+            self.waiting,
+            self.away,
+            self.pushing,
+            self.failed,
+        )
+
     def current_tau(self, now: float) -> float:
         """Progress in the leg at ``now`` (0 without a leg)."""
         leg = self.leg

@@ -97,7 +97,7 @@ frames it takes on the medium; nothing is shared between peers.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -296,7 +296,7 @@ class Sight:
                 h.trace.add(
                     h.kernel.now, "wake", arm=h.p.arm_names[a], detail="geometric conflict over"
                 )
-            self.view[a] = replace(rnd.view, running=True, t_ref=h.kernel.now)
+            self.view[a] = rnd.view.as_running(h.kernel.now)
         elif found:
             if self.held_by != found:
                 leg = rnd.view.leg
@@ -363,7 +363,7 @@ class Sight:
         if b in self.out:
             return
         ANSWER_MACHINE.check(state, AnswerState.RESERVED)
-        self.reserved.setdefault(b, {})[c.ask] = replace(c.view, running=True)
+        self.reserved.setdefault(b, {})[c.ask] = c.view.as_running()
         self.n += 1
         self._send(
             b, "motion_report", ClearanceReply(self.view[self.a], self.n, self.decided, c.ask)
