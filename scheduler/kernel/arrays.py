@@ -182,11 +182,15 @@ class Ctx(NamedTuple):
 
 class Scratch(NamedTuple):
     """Work buffers of one instance: waits of the last query (``w``), segment
-    starts (``tau``), the best waits so far (``best_w``), all float64."""
+    starts (``tau``), the best waits so far (``best_w``), the earliest start
+    of each segment (``floor``), the waits of another placement of the same
+    query (``w2``), all float64."""
 
     w: FloatArray
     tau: FloatArray
     best_w: FloatArray
+    floor: FloatArray
+    w2: FloatArray
 
 
 class OracleTable(NamedTuple):
@@ -408,7 +412,9 @@ class Instance:
         self.n_tasks = problem.n_tasks
         self.n_arms = problem.n_arms
         nb = max(self.max_borders, 1)
-        self.scratch = Scratch(np.zeros(nb), np.zeros(nb + 1), np.zeros(nb))
+        self.scratch = Scratch(
+            np.zeros(nb), np.zeros(nb + 1), np.zeros(nb), np.zeros(nb + 1), np.zeros(nb)
+        )
         self._empty: State | None = None
         A = problem.n_arms
         self._width = problem.n_modes + A

@@ -11,7 +11,11 @@ of already placed tasks, finds the earliest start ``S >= S0`` such that
   the intervals :mod:`scheduler.timing` defines, given the waits it inserts
   at zone borders (waits mode: each border gets the least wait that lets the
   next part of the path through, while the arm stands in the zones it is in;
-  rigid mode: no waits, the whole task is delayed) (S2.6, S2.12);
+  when standing there clashes with another arm's use of such a zone, the
+  task either starts later, so that it enters the zone after that use, or
+  waits at the border where it enters the zone until the use is over,
+  whichever ends first, the later start on a tie; rigid mode: no waits, the
+  whole task is delayed) (S2.6, S2.12);
 * start zones: an arm stands in its exclusive start zones from 0 until it
   leaves for its first task.
 
@@ -130,11 +134,24 @@ def _fit_waits(
     res_n,
     waits_out,
     taus,
+    floors,
+    entry,
 ):
     """Earliest start >= S0 with the least waits at borders; fills
-    ``waits_out[:borders]``; returns (start, end without extra)."""
+    ``waits_out[:borders]``; returns (start, end without extra, whether a
+    wait moved to an entry border).
+
+    A wait at a border holds the zones the arm stands in. When that
+    clashes with another arm's use of such a zone, the task starts later,
+    so that it enters the zone after that use; or, with ``entry``, the arm
+    waits instead at the border where it entered the zone, until that use is
+    over (the segment's *floor*, ``floors``; a zone held from the task's
+    start still makes it start later)."""
     seg0 = seg_ptr[m]
     nseg = seg_ptr[m + 1] - seg0
+    for j in range(nseg):
+        floors[j] = -INF
+    moved = False
     S = S0
     while True:
         tau = _fit(
@@ -152,20 +169,21 @@ def _fit_waits(
             res_n,
         )
         if not (tau < INF):
-            return INF, INF
+            return INF, INF, moved
         S = tau
         taus[0] = tau
-        ok = True
-        for j in range(1, nseg):
+        later = False
+        j = 1
+        while j < nseg:
             sj = seg0 + j
-            alpha = tau + seg_len[sj - 1]
+            alpha = taus[j - 1] + seg_len[sj - 1]
             need = _fit(
                 sp_res,
                 sp_s,
                 sp_e,
                 segp_ptr[sj],
                 segp_ptr[sj + 1],
-                alpha,
+                max(alpha, floors[j]),
                 arm,
                 tl_s,
                 tl_e,
@@ -174,31 +192,43 @@ def _fit_waits(
                 res_n,
             )
             if not (need < INF):
-                return INF, INF
+                return INF, INF, moved
             w = need - alpha
             if w > EPS:
+                back = -1
                 for q in range(stand_ptr[sj], stand_ptr[sj + 1]):
                     r = st_res[q]
                     if res_n[r] == 0:
                         continue
                     k = _first_conflict(tl_s, tl_e, tl_own, res_lo[r], res_n[r], alpha, need, arm)
                     if k >= 0:
-                        shift = tl_e[k] - taus[st_origin[q]]
-                        if not (shift < INF):
-                            return INF, INF
-                        S = S + max(shift, 1e-6)
-                        ok = False
+                        o = st_origin[q]
+                        if o == 0 or not entry:
+                            shift = tl_e[k] - taus[o]
+                            if not (shift < INF):
+                                return INF, INF, moved
+                            S = S + max(shift, 1e-6)
+                            later = True
+                        else:
+                            if not (tl_e[k] < INF):
+                                return INF, INF, moved
+                            floors[o] = max(floors[o], tl_e[k])
+                            back = o
+                            moved = True
                         break
-                if not ok:
+                if later:
                     break
+                if back > 0:
+                    j = back  # wait at the border before segment ``back`` instead
+                    continue
                 waits_out[j - 1] = w
             else:
                 waits_out[j - 1] = 0.0
                 need = alpha
-            tau = need
-            taus[j] = tau
-        if ok:
-            return S, tau + seg_len[seg0 + nseg - 1]
+            taus[j] = need
+            j += 1
+        if not later:
+            return S, taus[nseg - 1] + seg_len[seg0 + nseg - 1], moved
 
 
 @njit(cache=True)
@@ -239,6 +269,8 @@ def _query(d, st, sc, t, m, S0, chrono, use_waits, extra, arm_lb):
     tl_own = st.tl_own
     res_n = st.res_n
     waits_out = sc.w
+    floors = sc.floor
+    other_w = sc.w2
     a = d.mode_arm[m]
     lo = d.arm_lo[a]
     n = st.arm_n[a]
@@ -301,7 +333,11 @@ def _query(d, st, sc, t, m, S0, chrono, use_waits, extra, arm_lb):
         S = lb
         while True:
             if use_waits and nb > 0:
-                S, end = _fit_waits(
+                # the entry-border rule; where it moved a wait, the plain
+                # later start too, and the earlier end of the two (a tie: the
+                # later start, which stands less)
+                S_in = S
+                S, end, moved = _fit_waits(
                     m,
                     S,
                     a,
@@ -321,7 +357,40 @@ def _query(d, st, sc, t, m, S0, chrono, use_waits, extra, arm_lb):
                     res_n,
                     waits_out,
                     taus,
+                    floors,
+                    True,
                 )
+                if moved:
+                    for j in range(nb):
+                        other_w[j] = waits_out[j]
+                    S2, end2, _m = _fit_waits(
+                        m,
+                        S_in,
+                        a,
+                        seg_ptr,
+                        seg_len,
+                        segp_ptr,
+                        sp_res,
+                        sp_s,
+                        sp_e,
+                        stand_ptr,
+                        st_res,
+                        st_origin,
+                        tl_s,
+                        tl_e,
+                        tl_own,
+                        res_lo,
+                        res_n,
+                        waits_out,
+                        taus,
+                        floors,
+                        False,
+                    )
+                    if end < end2 - EPS:
+                        for j in range(nb):
+                            waits_out[j] = other_w[j]
+                    else:
+                        S, end = S2, end2
             else:
                 S = _fit(
                     rp_res,
