@@ -21,6 +21,13 @@ Side by side in one run, on one plan (the tree search's, seeded):
 Targets (issue): >= 2000x at event level with the monitor off, >= 1000x at
 event level with the live monitor, >= 200x at 1 ms ticks.
 
+The plan is work-limited (``evaluations`` decodes of the tree search, so the
+same on every machine). With a ``baseline`` revision, the same speed rows
+run in a second process on that revision's code (``git archive``), fed the
+same plan, alternating with this one, so the ratios hold on a loaded
+machine. Then one run of each level is profiled (``cProfile``) and its time
+split by where it goes (:data:`AREAS`): the misses are explained there.
+
 A thin wrapper of the sweep ``benchmarks/sweeps/sim.toml`` (one
 ``benchmark`` run of :func:`measure`: the whole table); it measures again on
 every call. Results: ``benchmarks/results/sim.parquet``, ``.json`` and
@@ -32,12 +39,15 @@ one repeat, two scenarios; seconds).
 
 from __future__ import annotations
 
+import json
 import math
+import os
 import signal
 import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -45,6 +55,7 @@ import numpy as np
 from benchmarks.common import table_main
 from multiarm.errors import MultiarmError
 from scheduler import solve, validate
+from scheduler.tree import TreeOptions
 from workcell import compile_cell, load_example
 from workcell.sim.harness.faults import FaultPlan
 from workcell.sim.harness.options import SimOptions
@@ -176,39 +187,231 @@ def _faulty_run(
     }
 
 
+LEVELS: dict[str, dict[str, Any]] = {
+    "event": {"monitor": False},
+    "live": {"monitor": "live"},
+    "post": {"monitor": "post"},
+    "tick": {"monitor": False, "tick": 1e-3},
+}
+"""The speed rows: :class:`SimOptions` keywords of each (``tick``'s period
+is replaced by the sweep's)."""
+
+AREAS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("geometric check (S2.12 guard)", ("workcell/sim/coordination/guard", "_zone_sweep_jit")),
+    ("safety monitor", ("workcell/sim/harness/monitor",)),
+    (
+        "link, channel and medium (per frame)",
+        ("workcell/sim/comms/", "workcell/sim/protocol/channel", "workcell/sim/protocol/records"),
+    ),
+    ("event loop", ("workcell/sim/events/loop",)),
+    ("trace records", ("workcell/sim/events/trace",)),
+    ("arm controllers", ("workcell/sim/control/",)),
+    (
+        "coordinator (zones, dispatch, recovery)",
+        ("workcell/sim/coordination/", "zones/"),
+    ),
+    ("kinematics and trajectories", ("workcell/arms/",)),
+    ("results and set-up", ("workcell/sim/harness/",)),
+    ("numpy, numba and Python built-ins", ("numpy", "numba", "~", "<")),
+)
+"""Where a profiled run's time goes: (area, path fragments of its functions),
+first match wins; the rest is "other"."""
+
+
+def _areas(stats: Any) -> dict[str, float]:
+    """Seconds of own time (``tottime``) per :data:`AREAS` entry of a
+    :class:`pstats.Stats`, plus ``"other"`` and ``"total"``."""
+    out = {name: 0.0 for name, _frags in AREAS}
+    out["other"] = 0.0
+    for (path, _line, _fn), (_cc, _nc, tt, _ct, _callers) in stats.stats.items():
+        for name, frags in AREAS:
+            if any(f in path for f in frags):
+                out[name] += tt
+                break
+        else:
+            out["other"] += tt
+    out["total"] = sum(out.values())
+    return out
+
+
+def _profile(cc: Any, plan: Any, **kw: Any) -> dict[str, Any]:
+    """One run under ``cProfile``: its time per area and the ten functions
+    with the most own time."""
+    import cProfile
+    import pstats
+
+    prof = cProfile.Profile()
+    prof.enable()
+    try:
+        simulate(cc, plan, seed=0, options=SimOptions(**kw))
+    finally:
+        prof.disable()
+    st = pstats.Stats(prof)
+    top = sorted(st.stats.items(), key=lambda kv: -kv[1][2])[:10]  # type: ignore[attr-defined]
+    return {
+        "areas": _areas(st),
+        "top": [
+            {
+                "function": f"{Path(path).name}:{line}({fn})" if path != "~" else fn,
+                "calls": int(v[1]),
+                "own_s": float(v[2]),
+            }
+            for (path, line, fn), v in top
+        ],
+    }
+
+
+_CHILD = r"""
+import json, sys, time
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+import workcell
+assert workcell.__file__.startswith(sys.argv[1]), workcell.__file__
+from scheduler.schedule import Schedule
+from workcell import compile_cell, load_example
+from workcell.sim.harness.options import SimOptions
+from workcell.sim.harness.simulate import simulate
+job = json.loads(open(sys.argv[2]).read())
+cc = compile_cell(load_example(job["cell"]))
+plan = Schedule(np.array(job["mode"], dtype=np.int64), np.array(job["start"]),
+                np.array(job["end"]), tuple(np.array(w) for w in job["waits"]),
+                np.array(job["blocking"]))
+simulate(cc, plan, seed=0, options=SimOptions(monitor=False))
+print("ready", flush=True)
+for line in sys.stdin:
+    kw = json.loads(line)
+    c0 = time.process_time(); t0 = time.perf_counter()
+    r = simulate(cc, plan, seed=0, options=SimOptions(**kw))
+    wall = time.perf_counter() - t0; cpu = time.process_time() - c0
+    m = r.metrics
+    print(json.dumps({"wall_s": wall, "cpu_s": cpu, "simulated_s": float(m.executed_makespan),
+                      "events": int(m.events), "ticks": int(m.ticks)}), flush=True)
+"""
+"""The baseline's process: the same plan, one run per line of keywords."""
+
+
+class _Baseline:
+    """Another revision's simulation in a second process (:data:`_CHILD`)."""
+
+    def __init__(self, rev: str, cell: str, plan: Any) -> None:
+        import io
+        import subprocess
+        import tarfile
+        import tempfile
+
+        self.dir = tempfile.TemporaryDirectory(prefix="multiarm-baseline-")
+        root = Path(self.dir.name)
+        repo = Path(__file__).resolve().parent.parent
+        tar = subprocess.run(
+            ["git", "archive", "--format=tar", rev], cwd=repo, capture_output=True, check=True
+        ).stdout
+        with tarfile.open(fileobj=io.BytesIO(tar)) as tf:
+            tf.extractall(root, filter="data")
+        self.rev = subprocess.run(
+            ["git", "rev-parse", "--short", rev], cwd=repo, capture_output=True, text=True
+        ).stdout.strip()
+        job = {
+            "cell": cell,
+            "mode": np.asarray(plan.mode).tolist(),
+            "start": np.asarray(plan.start).tolist(),
+            "end": np.asarray(plan.end).tolist(),
+            "waits": [np.asarray(w).tolist() for w in plan.waits],
+            "blocking": np.asarray(plan.blocking).tolist(),
+        }
+        (root / "job.json").write_text(json.dumps(job))
+        env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", _CHILD, str(root), str(root / "job.json")],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            cwd=root,
+            env=env,
+        )
+        if self._line() != "ready":
+            raise MultiarmError(f"the baseline {rev!r} did not start")
+
+    def _line(self) -> str:
+        assert self.proc.stdout is not None
+        return self.proc.stdout.readline().strip()
+
+    def run(self, kw: dict[str, Any]) -> dict[str, Any]:
+        assert self.proc.stdin is not None
+        self.proc.stdin.write(json.dumps(kw) + "\n")
+        self.proc.stdin.flush()
+        line = self._line()
+        if not line:
+            raise MultiarmError("the baseline process stopped")
+        out: dict[str, Any] = json.loads(line)
+        return out
+
+    def close(self) -> None:
+        if self.proc.stdin is not None:
+            self.proc.stdin.close()
+        self.proc.wait(timeout=60)
+        self.dir.cleanup()
+
+
 def measure(
     seed: int,
     cell: str,
     scenarios: int,
     repeat: int,
-    time_limit: float,
+    evaluations: int,
     tick: float,
     cap: float,
+    baseline: str = "",
 ) -> dict[str, Any]:
-    """The whole table, side by side on one plan: the speed rows and the fault
+    """The whole table, side by side on one plan: the speed rows (and the
+    baseline revision's, alternating), their profiles, and the fault
     scenarios with and without re-solving (one sweep run)."""
     t0 = time.perf_counter()
     cc = compile_cell(load_example(cell))
     compile_s = time.perf_counter() - t0
     p = cc.problem
-    r = solve(p, "tree", time_limit=time_limit, seed=seed)
+    r = solve(
+        p, "tree", time_limit=None, seed=seed, options=TreeOptions(max_evaluations=evaluations)
+    )
     if r.schedule is None:
-        raise MultiarmError(f"cell {cell!r}: the tree search found no plan in {time_limit:g} s")
+        raise MultiarmError(
+            f"cell {cell!r}: the tree search found no plan in {evaluations} decodes"
+        )
     plan = r.schedule
     planned = validate(p, plan)
     # warm caches and compiled code once
     simulate(cc, plan, seed=0, options=SimOptions(monitor=False))
-
-    print("bench_sim: event level", file=sys.stderr, flush=True)
-    event = _speed(cc, plan, repeat, monitor=False)
-    monitors: dict[str, dict[str, Any]] = {}
-    for how in ("live", "post"):
-        try:
-            monitors[how] = _speed(cc, plan, repeat, monitor=how)
-        except MultiarmError as exc:  # the monitor stopped the run: say so in the table
-            monitors[how] = {"error": str(exc)}
-    print("bench_sim: every tick", file=sys.stderr, flush=True)
-    ticked = _speed(cc, plan, max(1, repeat - 1), monitor=False, tick=tick)
+    levels = {k: {**v, "tick": tick} if "tick" in v else dict(v) for k, v in LEVELS.items()}
+    child = _Baseline(baseline, cell, plan) if baseline else None
+    rows: dict[str, dict[str, Any]] = {}
+    base: dict[str, dict[str, Any]] = {}
+    try:
+        for level, kw in levels.items():
+            print(f"bench_sim: {level}", file=sys.stderr, flush=True)
+            n = repeat if level != "tick" else max(1, repeat - 1)
+            runs, theirs = [], []
+            for _ in range(n):  # alternating: the baseline's run, then this one's
+                if child is not None:
+                    theirs.append(child.run(kw))
+                try:
+                    runs.append(_speed(cc, plan, 1, **kw))
+                except MultiarmError as exc:  # the monitor stopped the run: say so
+                    runs.append({"error": str(exc)})
+                    break
+            ok = [x for x in runs if "error" not in x]
+            rows[level] = (
+                min(ok, key=lambda x: x["cpu_s"]) | {"rates": [x["rate"] for x in ok]}
+                if ok
+                else runs[-1]
+            )
+            if theirs:
+                base[level] = min(theirs, key=lambda x: x["cpu_s"])
+    finally:
+        if child is not None:
+            child.close()
+    print("bench_sim: profiles", file=sys.stderr, flush=True)
+    profiles = {level: _profile(cc, plan, **levels[level]) for level in ("event", "live", "tick")}
+    event, ticked = rows["event"], rows["tick"]
+    monitors = {"live": rows["live"], "post": rows["post"]}
 
     scen: list[dict[str, Any]] = []
     latencies: list[float] = []
@@ -224,8 +427,10 @@ def measure(
         "cell": cell,
         "seed": seed,
         "repeat": repeat,
-        "time_limit": time_limit,
+        "evaluations": evaluations,
         "tick": tick,
+        "baseline": {"revision": child.rev, "rows": base} if child is not None else {},
+        "profiles": profiles,
         "n_arms": p.n_arms,
         "n_tasks": p.n_tasks,
         "planned_makespan": planned,
@@ -267,13 +472,13 @@ def table(r: Any) -> str:
     def fmt(x: float | None) -> str:
         return f"{x:.1f}" if x is not None and math.isfinite(x) else "-"
 
+    how = f"{r['evaluations']} decodes" if "evaluations" in r else f"{r.get('time_limit', 0):g} s"
     lines = [
         f"# Simulation: {r['cell']} ({n_arms} arms, {n_tasks} tasks)",
         "",
-        f"Plan: tree search, {r['time_limit']:g} s, seed {r['seed']}: makespan {planned:.1f} s "
-        f"(compile {r['compile_s']:.1f} s). Simulation seed 0, ideal medium. Best of {repeat} "
-        "runs (ticks: of "
-        f"{max(1, repeat - 1)}). One process on a shared 2-core machine.",
+        f"Plan: tree search, {how}, seed {r['seed']}: makespan {planned:.1f} s "
+        f"(compile {r['compile_s']:.1f} s). Simulation seed 0, ideal medium. Least CPU time of "
+        f"{repeat} runs (ticks: of {max(1, repeat - 1)}). One process on a shared 2-core machine.",
         "",
         "| run | simulated s | wall s | simulated s per wall s | target | simulated s per CPU s "
         "| kernel events | ticks |",
@@ -310,6 +515,8 @@ def table(r: Any) -> str:
             if event["failed_tasks"]
             else []
         ),
+        *_side_by_side(r),
+        *_profile_lines(r),
         "",
         f"## Re-solving in the loop ({len(scen)} seeded fault scenarios, the same faults twice)",
         "",
@@ -347,6 +554,79 @@ def table(r: Any) -> str:
         "Without re-solving is `simulate(..., options=SimOptions(resolve=False))`.",
     ]
     return "\n".join(lines) + "\n"
+
+
+_LABELS = {
+    "event": "event level (monitor off)",
+    "live": "event level, live monitor",
+    "post": "event level, post-run check",
+    "tick": "every tick (monitor off)",
+}
+
+
+def _side_by_side(r: Any) -> list[str]:
+    """The baseline revision's speed rows beside this revision's (CPU seconds)."""
+    b = r.get("baseline") or {}
+    if not b:
+        return []
+    mine = {
+        "event": r["event_level"],
+        "live": r["monitored"],
+        "post": r["monitored_post_run"],
+        "tick": r["tick_level"],
+    }
+    out = [
+        "",
+        f"## Side by side with {b['revision']} (the same plan, runs alternating)",
+        "",
+        "| run | CPU s, this revision | CPU s, " + b["revision"] + " | speed-up | "
+        "simulated s per CPU s, this revision | kernel events (this, " + b["revision"] + ") |",
+        "|---|---|---|---|---|---|",
+    ]
+    for level, theirs in b["rows"].items():
+        m = mine[level]
+        if "error" in m or "cpu_s" not in m:
+            continue
+        out.append(
+            f"| {_LABELS[level]} | {m['cpu_s']:.3f} | {theirs['cpu_s']:.3f} | "
+            f"{theirs['cpu_s'] / m['cpu_s']:.2f}x | {m['simulated_s'] / m['cpu_s']:.0f}x | "
+            f"{m['events']}, {theirs['events']} |"
+        )
+    return out
+
+
+def _profile_lines(r: Any) -> list[str]:
+    """Where a profiled run's time goes (the misses' explanation)."""
+    prof = r.get("profiles") or {}
+    if not prof:
+        return []
+    levels = [lv for lv in ("event", "live", "tick") if lv in prof]
+    names = [name for name, _f in AREAS] + ["other"]
+    out = [
+        "",
+        "## Where the time goes (one profiled run each; cProfile's own time per area, "
+        "so its overhead inflates the many small calls)",
+        "",
+        "| area | " + " | ".join(_LABELS[lv] for lv in levels) + " |",
+        "|---|" + "---|" * len(levels),
+    ]
+    for name in names:
+        cells = []
+        for lv in levels:
+            a = prof[lv]["areas"]
+            cells.append(f"{100 * a[name] / a['total']:.1f} %")
+        out.append(f"| {name} | " + " | ".join(cells) + " |")
+    out.append(
+        "| profiled seconds | "
+        + " | ".join(f"{prof[lv]['areas']['total']:.2f}" for lv in levels)
+        + " |"
+    )
+    out += ["", "The functions with the most own time, event level (monitor off):", ""]
+    out += ["| function | calls | own s |", "|---|---|---|"]
+    out += [
+        f"| `{x['function']}` | {x['calls']} | {x['own_s']:.3f} |" for x in prof["event"]["top"]
+    ]
+    return out
 
 
 def main(argv: list[str] | None = None) -> None:
