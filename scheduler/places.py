@@ -106,10 +106,15 @@ class PlaceOptions:
     between two places)."""
     quota_penalty: float = 1000.0
     """Score added to a task of a class whose share the arm has done."""
-    min_tasks: int = 200
+    min_tasks: int = 100
     """Apply to problems with at least this many tasks."""
-    min_tasks_per_place: float = 4.0
-    """Apply when the tasks share places: at least this many per place."""
+    min_tasks_per_place: float = 2.0
+    """Apply when the tasks share places: at least this many per place on
+    average. With ``random_problem``'s 49 grid points, the tree at 10 s
+    gained from the start at 6 x 100 (2.0-2.4 tasks per place, seeds 10-14:
+    mean gap to the bound 47.8 % -> 40.8 %, better on all five) and 8 x 200
+    (about 4 per place: 50.2 % -> 33.9 %), and nothing at 4 x 40 (about 1.5
+    per place: 35.5 % -> 34.8 %, worse on one of five)."""
     time_share: float = 0.15
     """With a time limit, start no construction after this share of it."""
 
@@ -145,11 +150,16 @@ class Places:
     unit : (A,) float, seconds
         Each arm's shortest travel between two different places (0 when it
         sees only one).
+    clean : bool
+        Every arm reaches every task it can do at a place from every other
+        one there in no time (checked from one task per arm and place): the
+        places are points, not chains of near ones.
     """
 
     place: IntArray
     n_places: int
     unit: FloatArray
+    clean: bool
 
 
 def find_places(problem: Problem, tol: float = 1e-9) -> Places:
@@ -185,6 +195,7 @@ def find_places(problem: Problem, tol: float = 1e-9) -> Places:
         return x
 
     unit = np.full(A, math.inf)
+    reps: list[tuple[int, int, int]] = []  # (arm, task, tasks of the arm at its place)
     for a in range(A):
         tasks = np.flatnonzero(p.mode_of[a] >= 0)
         if len(tasks) == 0:
@@ -195,8 +206,9 @@ def find_places(problem: Problem, tol: float = 1e-9) -> Places:
                 continue
             row = p.setup_row(a, t)[tasks]
             here = row <= tol
+            here[tasks == t] = True
+            reps.append((a, t, int(here.sum())))
             seen[tasks[here]] = True
-            seen[t] = True
             away = row[~here]
             if len(away):
                 unit[a] = min(unit[a], float(away.min()))
@@ -206,9 +218,14 @@ def find_places(problem: Problem, tol: float = 1e-9) -> Places:
                 if ru != rt:
                     parent[ru] = rt
     roots = np.array([root(t) for t in range(T)], dtype=np.int64)
-    _, place = np.unique(roots, return_inverse=True)
+    _, inverse = np.unique(roots, return_inverse=True)
+    place = inverse.astype(np.int64)
+    P = int(place.max()) + 1 if T else 0
+    counts = np.zeros((A, max(P, 1)), dtype=np.int64)
+    np.add.at(counts, (p.mode_arm, place[p.mode_task]), 1)
+    clean = all(counts[a, place[t]] == n for a, t, n in reps)
     unit[~np.isfinite(unit)] = 0.0
-    return Places(place.astype(np.int64), int(place.max()) + 1 if T else 0, unit)
+    return Places(place, P, unit, clean)
 
 
 def usable_places(problem: Problem, options: PlaceOptions | None = None) -> Places | None:
@@ -216,8 +233,10 @@ def usable_places(problem: Problem, options: PlaceOptions | None = None) -> Plac
 
     The rule: setup times (something to save), no blocking oracle (the
     construction places tasks without the oracle's detours), at least
-    ``options.min_tasks`` tasks, and on average at least
-    ``options.min_tasks_per_place`` tasks per place (:func:`find_places`).
+    ``options.min_tasks`` tasks, places that are points (``Places.clean``:
+    not chains of tasks a zero setup apart, as random setup matrices make),
+    at least two of them, and on average at least ``options.min_tasks_per_place`` tasks per place
+    (:func:`find_places`).
 
     Parameters
     ----------
@@ -233,6 +252,8 @@ def usable_places(problem: Problem, options: PlaceOptions | None = None) -> Plac
     if p._setup.zero or p.blocking is not None or p.n_tasks < max(opt.min_tasks, 1):
         return None
     pl = find_places(p)
+    if not pl.clean or pl.n_places < 2:
+        return None
     return pl if p.n_tasks >= opt.min_tasks_per_place * pl.n_places else None
 
 

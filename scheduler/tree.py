@@ -676,8 +676,9 @@ def _solve_tree(
                     )
                     stats.phases["beam"] = stats.phases.get("beam", 0.0) + time.perf_counter() - ph
                     width *= 2
-                    if time.perf_counter() >= ph + budget:
-                        # the pass ran out of its time: a wider one, with less time, would too
+                    if places is not None and time.perf_counter() >= ph + budget:
+                        # on a problem as large as those the place-aware start serves, the
+                        # pass ran out of its time: a wider one, with less time, would too
                         width = opt.max_width + 1
                 if best is None:
                     offer(ev.evaluate(priority_order(p, rng=rng, noise=opt.restart_noise)))
