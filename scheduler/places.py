@@ -235,8 +235,8 @@ def usable_places(problem: Problem, options: PlaceOptions | None = None) -> Plac
     construction places tasks without the oracle's detours), at least
     ``options.min_tasks`` tasks, places that are points (``Places.clean``:
     not chains of tasks a zero setup apart, as random setup matrices make),
-    at least two of them, and on average at least ``options.min_tasks_per_place`` tasks per place
-    (:func:`find_places`).
+    at least two of them, and on average at least
+    ``options.min_tasks_per_place`` tasks per place (:func:`find_places`).
 
     Parameters
     ----------
@@ -322,13 +322,11 @@ def class_quotas(problem: Problem, overhead: FloatArray) -> tuple[IntArray, Floa
 class _Prepared:
     """What every construction of one problem shares."""
 
-    rank: FloatArray
-    dur: FloatArray  # (A, T) duration of each arm's mode, inf where none
-    can: np.ndarray  # (A, T) bool
-    cls: IntArray
-    quota: FloatArray
-    charge: FloatArray  # (A, T) what a task counts against the arm's quota
-    nb: IntArray  # borders per mode
+    rank: FloatArray  # (T,) HEFT upward rank (a tiny tie-break: longer tails first)
+    can: np.ndarray  # (A, T) bool, the arm can do the task
+    cls: IntArray  # (T,) each task's class
+    quota: FloatArray  # (A, K) each arm's share of each class, seconds
+    charge: FloatArray  # (A, T) what a task counts against the arm's share, seconds
 
 
 def _prepare(problem: Problem, places: Places, opt: PlaceOptions) -> _Prepared:
@@ -337,9 +335,7 @@ def _prepare(problem: Problem, places: Places, opt: PlaceOptions) -> _Prepared:
     dur = np.where(can, p.mode_duration[np.maximum(p.mode_of, 0)], np.inf)
     overhead = opt.quota_travel * places.unit
     cls, quota = class_quotas(p, overhead)
-    charge = dur + overhead[:, None]
-    nb = np.array([len(p.shapes[m].borders) for m in range(p.n_modes)], dtype=np.int64)
-    return _Prepared(rank_upward(p), dur, can, cls, quota, charge, nb)
+    return _Prepared(rank_upward(p), can, cls, quota, dur + overhead[:, None])
 
 
 def place_dispatch(
@@ -375,13 +371,13 @@ def place_dispatch(
         cannot be placed (a start zone held for good).
     """
     p = problem
+    T, A = p.n_tasks, p.n_arms
+    if T == 0:
+        return None
     opt = options or PlaceOptions()
     pl = places if places is not None else find_places(p)
     pre = _prep if _prep is not None else _prepare(p, pl, opt)
     inst = ev.inst
-    T, A = p.n_tasks, p.n_arms
-    if T == 0:
-        return None
     ev.evaluations += 1
     st = inst.new_state()
     rel = np.asarray(p.task_release, dtype=float)
