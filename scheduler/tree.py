@@ -47,6 +47,7 @@ from multiarm.types import FloatArray, IntArray
 from scheduler import _ctrl_c, exact
 from scheduler.bounds import heads_and_tails
 from scheduler.kernel import State, expand
+from scheduler.places import PlaceOptions, place_start, usable_places
 from scheduler.problem import Problem
 from scheduler.result import Result, SearchStats, SolveStatus
 from scheduler.search import Evaluator, Solution, local_search, priority_order
@@ -129,8 +130,16 @@ class TreeOptions:
     fallback: bool = True
     """When no list order decodes, ask CP-SAT (one worker) within the budget
     left (:mod:`scheduler.fallback`)."""
+    places: PlaceOptions | None = field(default_factory=PlaceOptions)
+    """The place-aware start (:func:`scheduler.places.place_start`), offered
+    after the HEFT list where its rule holds (:func:`scheduler.places.usable_places`:
+    travel setups, many tasks per place); None: never."""
 
     def __post_init__(self) -> None:
+        if self.places is not None and not isinstance(self.places, PlaceOptions):
+            raise UsageError(
+                f"TreeOptions.places must be PlaceOptions or None, got {self.places!r}"
+            )
         ints = {
             "max_width": 1,
             "exact_max_tasks": 0,
@@ -296,9 +305,16 @@ def beam_pass(
 
 
 def _portfolio_member(  # type: ignore[no-untyped-def]
-    conn, problem: Problem, waits: bool, seed: int, seconds: float, lower: float = 0.0
+    conn,
+    problem: Problem,
+    waits: bool,
+    seed: int,
+    seconds: float,
+    lower: float = 0.0,
+    places: PlaceOptions | None = None,
 ) -> None:
-    """A forked worker: improve the HEFT schedule from its own seed, send back the best schedule."""
+    """A forked worker: improve the HEFT schedule (or the place-aware start,
+    when it applies and is better) from its own seed, send back the best schedule."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
@@ -307,6 +323,18 @@ def _portfolio_member(  # type: ignore[no-untyped-def]
         ev = Evaluator(problem, waits=waits)
         rng = np.random.default_rng(seed)
         sol = ev.evaluate(priority_order(problem, rng=rng, noise=0.1))
+        pl = usable_places(problem, places) if places is not None else None
+        if pl is not None and places is not None:
+            start = place_start(
+                problem,
+                ev,
+                seed,
+                options=places,
+                places=pl,
+                deadline=t0 + places.time_share * seconds,
+            )
+            if start is not None and (sol is None or start.key() < sol.key()):
+                sol = start
         if sol is None:
             conn.send(None)
             return
@@ -515,6 +543,13 @@ def _solve_tree(
     # the HEFT list came first (begin); then the warm start, if given
     if start is not None:
         offer(ev.evaluate(start.order, start.modes))
+    # then the place-aware start, where its rule holds (travel, many tasks per place)
+    places = usable_places(p, opt.places) if opt.places is not None else None
+    if places is not None and opt.places is not None:
+        ph = time.perf_counter()
+        until = math.inf if time_limit is None else t0 + opt.places.time_share * time_limit
+        offer(place_start(p, ev, seed, options=opt.places, places=places, deadline=until))
+        stats.phases["places"] = time.perf_counter() - ph
     lb = _integral_bound(p, st.lb)
     proven = False
     # the exact phase proves the problem without an idle blocking oracle (a
@@ -569,7 +604,7 @@ def _solve_tree(
                 here, there = ctx.Pipe(duplex=False)
                 proc = ctx.Process(
                     target=_portfolio_member,
-                    args=(there, p, waits, seed + 7919 * k, remaining - 0.15, lb),
+                    args=(there, p, waits, seed + 7919 * k, remaining - 0.15, lb, opt.places),
                     daemon=True,
                 )
                 proc.start()
@@ -641,6 +676,10 @@ def _solve_tree(
                     )
                     stats.phases["beam"] = stats.phases.get("beam", 0.0) + time.perf_counter() - ph
                     width *= 2
+                    if places is not None and time.perf_counter() >= ph + budget:
+                        # on a problem as large as those the place-aware start serves, the
+                        # pass ran out of its time: a wider one, with less time, would too
+                        width = opt.max_width + 1
                 if best is None:
                     offer(ev.evaluate(priority_order(p, rng=rng, noise=opt.restart_noise)))
                     if best is None:
