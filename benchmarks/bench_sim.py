@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import signal
 import sys
 import time
@@ -52,7 +51,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.common import table_main
+from benchmarks.common import RevisionProcess, table_main
 from multiarm.errors import MultiarmError
 from scheduler import solve, validate
 from scheduler.tree import TreeOptions
@@ -290,68 +289,6 @@ for line in sys.stdin:
 """The baseline's process: the same plan, one run per line of keywords."""
 
 
-class _Baseline:
-    """Another revision's simulation in a second process (:data:`_CHILD`)."""
-
-    def __init__(self, rev: str, cell: str, plan: Any) -> None:
-        import io
-        import subprocess
-        import tarfile
-        import tempfile
-
-        self.dir = tempfile.TemporaryDirectory(prefix="multiarm-baseline-")
-        root = Path(self.dir.name)
-        repo = Path(__file__).resolve().parent.parent
-        tar = subprocess.run(
-            ["git", "archive", "--format=tar", rev], cwd=repo, capture_output=True, check=True
-        ).stdout
-        with tarfile.open(fileobj=io.BytesIO(tar)) as tf:
-            tf.extractall(root, filter="data")
-        self.rev = subprocess.run(
-            ["git", "rev-parse", "--short", rev], cwd=repo, capture_output=True, text=True
-        ).stdout.strip()
-        job = {
-            "cell": cell,
-            "mode": np.asarray(plan.mode).tolist(),
-            "start": np.asarray(plan.start).tolist(),
-            "end": np.asarray(plan.end).tolist(),
-            "waits": [np.asarray(w).tolist() for w in plan.waits],
-            "blocking": np.asarray(plan.blocking).tolist(),
-        }
-        (root / "job.json").write_text(json.dumps(job))
-        env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-        self.proc = subprocess.Popen(
-            [sys.executable, "-c", _CHILD, str(root), str(root / "job.json")],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-            cwd=root,
-            env=env,
-        )
-        if self._line() != "ready":
-            raise MultiarmError(f"the baseline {rev!r} did not start")
-
-    def _line(self) -> str:
-        assert self.proc.stdout is not None
-        return self.proc.stdout.readline().strip()
-
-    def run(self, kw: dict[str, Any]) -> dict[str, Any]:
-        assert self.proc.stdin is not None
-        self.proc.stdin.write(json.dumps(kw) + "\n")
-        self.proc.stdin.flush()
-        line = self._line()
-        if not line:
-            raise MultiarmError("the baseline process stopped")
-        out: dict[str, Any] = json.loads(line)
-        return out
-
-    def close(self) -> None:
-        if self.proc.stdin is not None:
-            self.proc.stdin.close()
-        self.proc.wait(timeout=60)
-        self.dir.cleanup()
-
-
 def measure(
     seed: int,
     cell: str,
@@ -381,7 +318,17 @@ def measure(
     # warm caches and compiled code once
     simulate(cc, plan, seed=0, options=SimOptions(monitor=False))
     levels = {k: {**v, "tick": tick} if "tick" in v else dict(v) for k, v in LEVELS.items()}
-    child = _Baseline(baseline, cell, plan) if baseline else None
+    child = None
+    if baseline:
+        job = {
+            "cell": cell,
+            "mode": np.asarray(plan.mode).tolist(),
+            "start": np.asarray(plan.start).tolist(),
+            "end": np.asarray(plan.end).tolist(),
+            "waits": [np.asarray(w).tolist() for w in plan.waits],
+            "blocking": np.asarray(plan.blocking).tolist(),
+        }
+        child = RevisionProcess(baseline, _CHILD, json.dumps(job).encode())
     rows: dict[str, dict[str, Any]] = {}
     base: dict[str, dict[str, Any]] = {}
     try:
@@ -391,7 +338,7 @@ def measure(
             runs, theirs = [], []
             for _ in range(n):  # alternating: the baseline's run, then this one's
                 if child is not None:
-                    theirs.append(child.run(kw))
+                    theirs.append(child.ask(json.dumps(kw)))
                 try:
                     runs.append(_speed(cc, plan, 1, **kw))
                 except MultiarmError as exc:  # the monitor stopped the run: say so

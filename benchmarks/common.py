@@ -284,3 +284,77 @@ def table_main(
         path = publish(name, df, render(df), out, quick=args.quick, flags="--fresh")
     print(path.read_text())
     return path
+
+
+class RevisionProcess:
+    """Another git revision's code in a second process, fed one line at a time.
+
+    The revision is unpacked (``git archive``) into a temporary directory;
+    ``script`` runs there as ``python -c script ROOT JOB`` (``ROOT`` the
+    unpacked tree, to put first on ``sys.path``; ``JOB`` a file holding
+    ``job``), prints ``ready`` once set up, then answers each line sent with
+    one line of JSON. Benchmarks measure the baseline side by side this way,
+    alternating with their own runs, so ratios hold on a loaded machine.
+
+    Parameters
+    ----------
+    rev : str
+        A git revision of this repository.
+    script : str
+        The child's Python source.
+    job : bytes
+        What the child reads from ``JOB``.
+    """
+
+    def __init__(self, rev: str, script: str, job: bytes) -> None:
+        import io
+        import tarfile
+
+        self.dir = tempfile.TemporaryDirectory(prefix="multiarm-baseline-")
+        root = Path(self.dir.name)
+        repo = Path(__file__).resolve().parent.parent
+        tar = subprocess.run(
+            ["git", "archive", "--format=tar", rev], cwd=repo, capture_output=True, check=True
+        ).stdout
+        with tarfile.open(fileobj=io.BytesIO(tar)) as tf:
+            tf.extractall(root, filter="data")
+        self.rev = subprocess.run(
+            ["git", "rev-parse", "--short", rev], cwd=repo, capture_output=True, text=True
+        ).stdout.strip()
+        (root / "job").write_bytes(job)
+        env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", script, str(root), str(root / "job")],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            cwd=root,
+            env=env,
+        )
+        if self._line() != "ready":
+            self.close()
+            raise RuntimeError(f"the baseline {rev!r} did not start")
+
+    def _line(self) -> str:
+        assert self.proc.stdout is not None
+        return self.proc.stdout.readline().strip()
+
+    def ask(self, line: str) -> dict[str, Any]:
+        """Send one line; return the child's answer (one line of JSON)."""
+        assert self.proc.stdin is not None
+        self.proc.stdin.write(line.rstrip("\n") + "\n")
+        self.proc.stdin.flush()
+        got = self._line()
+        if not got:
+            raise RuntimeError("the baseline process stopped")
+        out: dict[str, Any] = json.loads(got)
+        return out
+
+    def close(self) -> None:
+        """End the child and remove its tree."""
+        if self.proc.stdin is not None and not self.proc.stdin.closed:
+            self.proc.stdin.close()
+        try:
+            self.proc.wait(timeout=60)
+        finally:
+            self.dir.cleanup()
