@@ -198,17 +198,22 @@ def _periodic(k: EventLoop, period: float, times: list[float], inline: bool) -> 
     k.schedule(0.0, tick, 20)
 
 
+def _ticks_and_others(inline: bool) -> tuple[list[float], list[tuple[float, float]], EventLoop]:
+    k = EventLoop()
+    ticks: list[float] = []
+    others: list[tuple[float, float]] = []
+    _periodic(k, 0.25, ticks, inline)
+    # callbacks between, at and (with a higher priority) before ticks
+    k.schedule(1.1, lambda: others.append((k.now, ticks[-1])))
+    k.schedule(2.0, lambda: others.append((k.now, ticks[-1])))
+    k.schedule(3.0, lambda: others.append((k.now, ticks[-1])), priority=-1)
+    k.run()
+    return ticks, others, k
+
+
 def test_advance_runs_the_next_period_inline_only_when_nothing_else_is_due() -> None:
     for inline in (False, True):
-        k = EventLoop()
-        ticks: list[float] = []
-        others: list[tuple[float, float]] = []
-        _periodic(k, 0.25, ticks, inline)
-        # callbacks between, at and (with a higher priority) before ticks
-        k.schedule(1.1, lambda: others.append((k.now, ticks[-1])))
-        k.schedule(2.0, lambda: others.append((k.now, ticks[-1])))
-        k.schedule(3.0, lambda: others.append((k.now, ticks[-1])), priority=-1)
-        k.run()
+        ticks, others, k = _ticks_and_others(inline)
         # the same order either way: a callback due at a tick's time runs first
         # (it was scheduled before the tick), and one of a higher priority too
         assert ticks == [0.25 * i for i in range(21)]
