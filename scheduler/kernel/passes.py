@@ -131,7 +131,7 @@ def _decode(d, st, cx, sc, ot, pending, fixed, cursor):
                 continue
             for j in range(nbmax):
                 t_waits[t, j] = best_w[j]
-            _commit(d, st, t, bm, bS, best, bk, best_w)
+            _commit(d, st, t, bm, bS, best, bk, best_w, sc.cw)
             placed += 1
         if kept == n:
             return -(placed + 1)
@@ -325,7 +325,7 @@ def _seq_decode(d, st, cx, sc, seq, seq_n, modes, order_out):
         for j in range(nbmax):
             best_w[j] = waits_out[j] if (use_waits and j < nb) else 0.0
             t_waits[t, j] = best_w[j]
-        _commit(d, st, t, m, S, end, k, best_w)
+        _commit(d, st, t, m, S, end, k, best_w, sc.cw)
         order_out[placed] = t
         placed += 1
         for q in range(succ_ptr[t], succ_ptr[t + 1]):
