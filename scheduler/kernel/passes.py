@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scheduler.kernel._jit import EPS, INF, njit
+from scheduler.kernel._jit import EPS, INF, NO_REFCOUNT, njit
 from scheduler.kernel.place import (
     MISSING,
     PLACED,
@@ -35,7 +35,7 @@ RESUME = 1
 """Return code of :func:`_decode`: oracle answers are missing, call again."""
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _decode(d, st, cx, sc, ot, pending, fixed, cursor):
     """Place ``pending[:cursor[0]]`` one task after another; ``fixed[t] >= 0``
     forces a mode, -1 picks the earliest-finishing one (ties: less waiting
@@ -141,7 +141,7 @@ def _decode(d, st, cx, sc, ot, pending, fixed, cursor):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _expand(d, st, cx, sc, cand_t, cand_m, out_S, out_end, out_k, out_w, out_waits):
     """Query many (task, mode) candidates against one state (read-only)."""
     nbmax = out_waits.shape[1]
@@ -168,7 +168,7 @@ def _expand(d, st, cx, sc, cand_t, cand_m, out_S, out_end, out_k, out_w, out_wai
         out_w[i] = wsum
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _expand_blocking(
     d, st, cx, sc, ot, cand_t, cand_m, out_S, out_end, out_k, out_w, out_waits, out_c
 ):
@@ -201,7 +201,7 @@ def _expand_blocking(
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _place_one(d, st, sc, ot, t, m, S0, use_waits, arm_lb, out):
     """One blocking placement; ``out`` = (start, end, slot, cost); returns the status."""
     status, S, end, k, c = _place_blocking(d, st, sc, ot, t, m, S0, use_waits, arm_lb)

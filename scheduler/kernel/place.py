@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 
-from scheduler.kernel._jit import EPS, INF, njit
+from scheduler.kernel._jit import EPS, INF, NO_REFCOUNT, njit
 
 __all__: list[str] = []
 
@@ -71,7 +71,7 @@ def _setup(kind, table, arm_off, arm_count, slot, mode_of, a, prev, nxt):
     return table[6 * M + 4 * A + a] + dist / table[6 * M + 3 * A + a]
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _first_conflict(tl_s, tl_e, tl_own, lo, n, x, y, arm):
     """Index of the first interval of [lo, lo+n) overlapping [x, y) owned by
     another arm, or -1. Overlaps below EPS do not count."""
@@ -93,7 +93,7 @@ def _first_conflict(tl_s, tl_e, tl_own, lo, n, x, y, arm):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _fit(p_res, p_s, p_e, p0, p1, t0, arm, tl_s, tl_e, tl_own, res_lo, res_n):
     """Least t >= t0 such that every piece [t + s, t + e) of p0..p1 is free."""
     t = t0
@@ -116,7 +116,7 @@ def _fit(p_res, p_s, p_e, p0, p1, t0, arm, tl_s, tl_e, tl_own, res_lo, res_n):
             return t
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _fit_waits(
     m,
     S0,
@@ -208,7 +208,7 @@ def _fit_waits(
             return S, tau + seg_len[seg0 + nseg - 1]
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _query(d, st, sc, t, m, S0, chrono, use_waits, extra, arm_lb):
     """Earliest placement of task t in mode m from S0: (start, end, arm slot);
     the waits are left in ``sc.w``."""
@@ -371,7 +371,7 @@ def _query(d, st, sc, t, m, S0, chrono, use_waits, extra, arm_lb):
     return INF, INF, -1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _insert(tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, s, e, own, task):
     """Insert interval [s, e) of ``own``/``task`` into resource r's timeline, sorted by start."""
     lo = res_lo[r]
@@ -396,7 +396,7 @@ def _insert(tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, s, e, own, task):
     res_n[r] = n + 1
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _commit(d, st, t, m, S, end, k, waits, cw):
     """Record task t in mode m at [S, end), slot k of its arm, with ``waits``
     (``cw``: a buffer for their prefix sums, one more than the most borders)."""
@@ -495,7 +495,7 @@ def _commit_all(d, st, ts, ms, ss, es, ws, cw):
         _commit(d, st, t, m, ss[i], es[i], st.arm_n[d.mode_arm[m]], ws[i], cw)
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _earliest(d, st, t, chrono, release):
     """Earliest start of t: release, predecessors' ends (and the latest start if chronological)."""
     pred_idx = d.pred_idx
@@ -510,7 +510,7 @@ def _earliest(d, st, t, chrono, release):
     return S0
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _oracle_get(keys, vals, key):
     """The answer stored under ``key`` (open addressing, linear probing), NaN if none."""
     mask = keys.shape[0] - 1
@@ -524,7 +524,7 @@ def _oracle_get(keys, vals, key):
         i = (i + 1) & mask
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _oracle_put(keys, vals, fill, new_keys, new_vals):
     """Store answers (the table must have room: at most half full afterwards)."""
     mask = keys.shape[0] - 1
@@ -539,7 +539,7 @@ def _oracle_put(keys, vals, fill, new_keys, new_vals):
         vals[i] = new_vals[q]
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _blocking_cost(d, st, ot, m, S):
     """Detour cost of mode m starting at S: the sum over the other arms parked
     at S (initial pose, or the end of their last task) of the oracle's cost.
@@ -583,7 +583,7 @@ def _blocking_cost(d, st, ot, m, S):
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _place_blocking(d, st, sc, ot, t, m, S0, use_waits, arm_lb):
     """Chronological placement with the oracle's detour cost.
 
