@@ -29,7 +29,7 @@ import numpy as np
 
 from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
-from scheduler.kernel import State, compile_problem, decode, to_schedule
+from scheduler.kernel import Ctx, State, compile_problem, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
 from scheduler.kernel.moves_jit import BEFORE, LIST, MODE, chrono_extend, neighbour_moves
 from scheduler.kernel.resume import (
@@ -114,6 +114,12 @@ def priority_order(
     return np.array(out, dtype=np.int64)
 
 
+def _copy_state(src: State, dst: State) -> None:
+    """Every field of ``src`` copied into ``dst`` (arrays of the same shapes)."""
+    for a, b in zip(src, dst, strict=True):
+        np.copyto(b, a)
+
+
 class Evaluator:
     """Decodes solutions of one problem and counts the evaluations.
 
@@ -163,6 +169,9 @@ class Evaluator:
         self._last_sol: Solution | None = None
         self._last_k = -1
         self._root_state: State | None = None
+        self._ctx: Ctx | None = None
+        self._spare: list[State] = []
+        """States of recycled solutions (:meth:`recycle`), overwritten by the next decodes."""
 
     # ---------------------------------------------------------- decoding
     def decode(
@@ -245,17 +254,27 @@ class Evaluator:
                 k -= 1
             k_from = k
         self.evaluations += 1
-        state = self.base.copy() if (k_from < 0 and self.base is not None) else None
+        state = self._fresh()
         if self.chrono:
             root = self._root()
             anchor = self._anchor_sol
             if k_from < 0 or anchor is None or anchor.state is None or ao is None:
                 k_from = -1
-                state = root.copy()
+                _copy_state(root, state)
             else:
-                state = restore(
-                    self.inst, root, anchor.state, ao, k_from * self._every, self.inst.new_state()
-                )
+                state = restore(self.inst, root, anchor.state, ao, k_from * self._every, state)
+        elif k_from < 0:
+            # a snapshot (k_from >= 0) is loaded over the whole state
+            _copy_state(self._root(), state)
+        if self._ctx is None:
+            self._ctx = self.inst.ctx(
+                chrono=self.chrono,
+                waits=self.waits,
+                blocking=self.blocking,
+                release=self.release,
+                allowed=self.allowed,
+                arm_lb=self.arm_lb,
+            )
         code, st = decode_resume(
             self.inst,
             order,
@@ -265,15 +284,12 @@ class Evaluator:
             k_from,
             every=self._every,
             state=state,
-            chrono=self.chrono,
-            waits=self.waits,
-            release=self.release,
-            allowed=self.allowed,
-            arm_lb=self.arm_lb,
             states=not self.chrono,
+            ctx=self._ctx,
         )
         self._last_sol = None
         if code != 0:
+            self._spare.append(st)
             return None
         sol = Solution(
             order.copy(),
@@ -291,6 +307,29 @@ class Evaluator:
         if self._root_state is None:
             self._root_state = self.base if self.base is not None else self.inst.new_state()
         return self._root_state
+
+    def _fresh(self) -> State:
+        """A state to decode into: a recycled one (:meth:`recycle`) or a new one."""
+        return self._spare.pop() if self._spare else self.inst.new_state()
+
+    def recycle(self, sol: Solution) -> None:
+        """Let :meth:`evaluate_resume` decode into the state of ``sol``, a
+        solution the caller drops (it must hold no other reference to it):
+        ``sol`` loses its state. The anchor (:meth:`anchor`) is never
+        recycled; a solution without a state is left alone.
+
+        Parameters
+        ----------
+        sol : Solution
+        """
+        st = sol.state
+        if st is None or sol is self._anchor_sol or st is self._root_state or st is self.base:
+            return
+        if sol is self._last_sol:
+            self._last_sol = None  # it can no longer become the anchor
+        sol.state = None
+        if len(self._spare) < 4:
+            self._spare.append(st)
 
     def anchor(self, sol: Solution) -> bool:
         """Make ``sol`` the list that :meth:`evaluate_resume` resumes from.
@@ -641,6 +680,7 @@ def local_search(
                 ev.anchor(cur)
                 improved = True
                 break
+            ev.recycle(cand)  # its state is decoded over by the next move
         if cur.key() < best.key():
             best = cur
             stall = 0

@@ -41,8 +41,8 @@ import numpy as np
 
 from multiarm.errors import UsageError
 from multiarm.types import BoolArray, FloatArray, IntArray
-from scheduler.kernel._jit import njit
-from scheduler.kernel.arrays import Instance, State
+from scheduler.kernel._jit import NO_REFCOUNT, njit
+from scheduler.kernel.arrays import Ctx, Instance, State
 from scheduler.kernel.passes import RESUME, _decode
 
 __all__ = ["Snaps", "chunk_size", "copy_rows", "decode_resume", "new_flags", "new_snaps", "restore"]
@@ -245,20 +245,24 @@ def new_flags(inst: Instance, n: int, every: int) -> Snaps:
     return Snaps._make(fields)
 
 
-@njit(cache=True)
-def _restore(d, root, fin, keep, st):
+@njit(cache=True, **NO_REFCOUNT)
+def _restore(d, root, fin, keep, st, has):
     """``st`` := ``root`` plus the intervals of the tasks ``keep`` marks in
-    ``fin`` (:func:`restore`)."""
+    ``fin`` (:func:`restore`); ``has`` (A,) bool is work space. Every field
+    ``st`` is read by is written (it may hold anything before)."""
     A = d.arm_lo.shape[0]
     T = fin.t_start.shape[0]
-    has = np.zeros(A, dtype=np.bool_)
+    nb = fin.t_waits.shape[1]
+    for a in range(A):
+        has[a] = False
     last = root.t_last[0]
     for t in range(T):
         if keep[t]:
             st.t_start[t] = fin.t_start[t]
             st.t_end[t] = fin.t_end[t]
             st.t_mode[t] = fin.t_mode[t]
-            st.t_waits[t] = fin.t_waits[t]
+            for j in range(nb):
+                st.t_waits[t, j] = fin.t_waits[t, j]
             has[d.mode_arm[fin.t_mode[t]]] = True
             if root.t_mode[t] < 0 and fin.t_start[t] > last:
                 last = fin.t_start[t]
@@ -266,6 +270,8 @@ def _restore(d, root, fin, keep, st):
             st.t_start[t] = np.nan
             st.t_end[t] = np.nan
             st.t_mode[t] = -1
+            for j in range(nb):
+                st.t_waits[t, j] = 0.0
     st.t_last[0] = last
     for a in range(A):
         lo = d.arm_lo[a]
@@ -329,7 +335,8 @@ def restore(
     upto : int
         Positions kept.
     state : State
-        Overwritten with the result (every field an array of ``root``'s shape).
+        Overwritten with the result (every field an array of ``root``'s
+        shape; what it held before does not matter).
 
     Returns
     -------
@@ -338,7 +345,7 @@ def restore(
     """
     keep = root.t_mode >= 0
     keep[np.asarray(order[:upto], dtype=np.int64)] = True
-    _restore(inst.data, root, final, keep, state)
+    _restore(inst.data, root, final, keep, state, np.zeros(inst.n_arms, dtype=np.bool_))
     return state
 
 
@@ -370,6 +377,7 @@ def decode_resume(
     allowed: Any = None,
     arm_lb: FloatArray | None = None,
     states: bool = True,
+    ctx: Ctx | None = None,
 ) -> tuple[int, State]:
     """Decode ``order`` in chunks, resuming from snapshot ``k_from`` of ``src``.
 
@@ -400,6 +408,10 @@ def decode_resume(
         ``src`` and ``out`` hold only the flags (:func:`new_flags`), and when
         ``k_from >= 0`` ``state`` already holds boundary ``k_from``
         (:func:`restore`, chronological decoding only).
+    ctx : Ctx or None
+        The options bundled once (:meth:`Instance.ctx`) for a caller that
+        decodes many lists with the same ones; then ``chrono``, ``waits``,
+        ``blocking``, ``release``, ``allowed`` and ``arm_lb`` are not read.
 
     Returns
     -------
@@ -415,17 +427,19 @@ def decode_resume(
     if not states and k_from >= 0 and state is None:
         raise UsageError("decode_resume: without saved states, pass the restored state")
     st = inst.new_state() if state is None else state
-    has = inst.problem.blocking is not None
-    if blocking and not has:
-        raise UsageError(f"problem {inst.problem.name!r} has no blocking oracle")
-    cx = inst.ctx(
-        chrono=chrono,
-        waits=waits,
-        blocking=has if blocking is None else bool(blocking),
-        release=release,
-        allowed=allowed,
-        arm_lb=arm_lb,
-    )
+    cx = ctx
+    if cx is None:
+        has = inst.problem.blocking is not None
+        if blocking and not has:
+            raise UsageError(f"problem {inst.problem.name!r} has no blocking oracle")
+        cx = inst.ctx(
+            chrono=chrono,
+            waits=waits,
+            blocking=has if blocking is None else bool(blocking),
+            release=release,
+            allowed=allowed,
+            arm_lb=arm_lb,
+        )
     order = np.ascontiguousarray(order, dtype=np.int64)
     fx = np.ascontiguousarray(fixed, dtype=np.int64)
     buf = np.empty(len(order) + 1, dtype=np.int64)
