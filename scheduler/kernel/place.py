@@ -378,6 +378,8 @@ def _insert(tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, s, e, own, task):
     n = res_n[r]
     x = lo
     y = lo + n
+    if n > 0 and tl_s[y - 1] <= s:
+        x = y  # after every interval (chronological decoding's common case)
     while x < y:
         mid = (x + y) // 2
         if tl_s[mid] <= s:
