@@ -33,13 +33,15 @@ from scheduler.kernel import Ctx, State, compile_problem, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
 from scheduler.kernel.moves_jit import BEFORE, LIST, MODE, chrono_extend, neighbour_moves
 from scheduler.kernel.resume import (
+    ResumeWork,
     Snaps,
     chunk_size,
     copy_rows,
     decode_resume,
     new_flags,
     new_snaps,
-    restore,
+    new_work,
+    resume_chrono,
 )
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
@@ -170,6 +172,7 @@ class Evaluator:
         self._last_k = -1
         self._root_state: State | None = None
         self._ctx: Ctx | None = None
+        self._work: ResumeWork | None = None
         self._spare: list[State] = []
         """States of recycled solutions (:meth:`recycle`), overwritten by the next decodes."""
 
@@ -235,37 +238,13 @@ class Evaluator:
             buffer = new_flags if self.chrono else new_snaps
             self._snaps = buffer(self.inst, n, self._every)
             self._scratch = buffer(self.inst, n, self._every)
+            self._work = new_work(self.inst, n)
             self._snap_n = n
             self._anchor_order = self._anchor_modes = self._anchor_sol = None
-        snaps, scratch = self._snaps, self._scratch
-        if snaps is None or scratch is None:
+        snaps, scratch, work = self._snaps, self._scratch, self._work
+        if snaps is None or scratch is None or work is None:
             raise InternalError("snapshot buffers missing")
         fixed = np.full(T, -1, dtype=np.int64) if modes is None else modes
-        k_from = -1
-        ao, am = self._anchor_order, self._anchor_modes
-        if ao is not None and am is not None:
-            diff = np.flatnonzero(order != ao)
-            p0 = int(diff[0]) if len(diff) else n
-            dm = np.flatnonzero(fixed[order] != am[order])
-            if len(dm):
-                p0 = min(p0, int(dm[0]))
-            k = p0 // self._every
-            while k > 0 and not snaps.ok[k]:
-                k -= 1
-            k_from = k
-        self.evaluations += 1
-        state = self._fresh()
-        if self.chrono:
-            root = self._root()
-            anchor = self._anchor_sol
-            if k_from < 0 or anchor is None or anchor.state is None or ao is None:
-                k_from = -1
-                _copy_state(root, state)
-            else:
-                state = restore(self.inst, root, anchor.state, ao, k_from * self._every, state)
-        elif k_from < 0:
-            # a snapshot (k_from >= 0) is loaded over the whole state
-            _copy_state(self._root(), state)
         if self._ctx is None:
             self._ctx = self.inst.ctx(
                 chrono=self.chrono,
@@ -275,18 +254,53 @@ class Evaluator:
                 allowed=self.allowed,
                 arm_lb=self.arm_lb,
             )
-        code, st = decode_resume(
-            self.inst,
-            order,
-            fixed,
-            snaps,
-            scratch,
-            k_from,
-            every=self._every,
-            state=state,
-            states=not self.chrono,
-            ctx=self._ctx,
-        )
+        ao, am = self._anchor_order, self._anchor_modes
+        self.evaluations += 1
+        state = self._fresh()
+        if self.chrono:
+            # one compiled call: where to resume, the boundary restored, the decode
+            anchor = self._anchor_sol
+            held = anchor.state if anchor is not None else None
+            code, k_from = resume_chrono(
+                self.inst,
+                self._ctx,
+                self._root(),
+                None if ao is None or am is None or held is None else (held, ao, am),
+                np.ascontiguousarray(order, dtype=np.int64),
+                np.ascontiguousarray(fixed, dtype=np.int64),
+                snaps,
+                scratch,
+                self._every,
+                state,
+                work,
+            )
+            st = state
+        else:
+            k_from = -1
+            if ao is not None and am is not None:
+                diff = np.flatnonzero(order != ao)
+                p0 = int(diff[0]) if len(diff) else n
+                dm = np.flatnonzero(fixed[order] != am[order])
+                if len(dm):
+                    p0 = min(p0, int(dm[0]))
+                k = p0 // self._every
+                while k > 0 and not snaps.ok[k]:
+                    k -= 1
+                k_from = k
+            if k_from < 0:
+                # a snapshot (k_from >= 0) is loaded over the whole state
+                _copy_state(self._root(), state)
+            code, st = decode_resume(
+                self.inst,
+                order,
+                fixed,
+                snaps,
+                scratch,
+                k_from,
+                every=self._every,
+                state=state,
+                ctx=self._ctx,
+            )
         self._last_sol = None
         if code != 0:
             self._spare.append(st)

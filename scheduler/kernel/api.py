@@ -38,12 +38,15 @@ from scheduler.kernel.passes import (
 from scheduler.kernel.place import MISSING, PLACED
 from scheduler.kernel.resume import (
     _decode_chunks,
+    _resume_chrono,
     chunk_size,
     copy_rows,
     decode_resume,
     new_flags,
     new_snaps,
+    new_work,
     restore,
+    resume_chrono,
 )
 from scheduler.problem import Model, Window
 
@@ -389,6 +392,7 @@ def _cached_on_disk() -> bool:
         _seq_decode,
         _chain,
         _decode_chunks,
+        _resume_chrono,
         _neighbour_moves,
     ):
         cache = getattr(fn, "_cache", None)
@@ -479,6 +483,13 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         back = restore(inst, root, fin, order, 0, inst.new_state())
         decode_resume(
             inst, order, free, flags, flags, 0, every=every, state=back, chrono=True, states=False
+        )
+        # the same in one compiled call (the local search's chronological decoder)
+        cx = inst.ctx(chrono=True, blocking=p.blocking is not None)
+        work = new_work(inst, len(order))
+        resume_chrono(inst, cx, root, None, order, free, flags, flags, every, back, work)
+        resume_chrono(
+            inst, cx, root, (fin, order, free), order, free, flags, flags, every, back, work
         )
         critical_chain(inst, st3)
         rng = np.random.default_rng(0)

@@ -591,6 +591,19 @@ class Instance:
             self._empty = self._build_empty()
         return self._empty.copy()
 
+    def layout(self) -> State:
+        """The empty partial schedule itself, shared: for the shapes and
+        dtypes of a state's fields (never mutate it; :meth:`new_state` gives
+        a copy to work on).
+
+        Returns
+        -------
+        State
+        """
+        if self._empty is None:
+            self._empty = self._build_empty()
+        return self._empty
+
     def _build_empty(self) -> State:
         """The empty partial schedule (built once; :meth:`new_state` copies it)."""
         T, A = self.n_tasks, self.n_arms
