@@ -353,3 +353,35 @@ def _seq_decode(d, st, cx, sc, seq, seq_n, modes, order_out):
                         est = t_end[pred_idx[r]]
                 size = _heap_push(keys, vals, size, est, s)
     return placed
+
+
+@njit(cache=True)
+def _keyed_order(d, todo, key, out):
+    """The tasks ``todo`` marks in a topological order (predecessors outside
+    ``todo`` count as done), the one with the smallest ``key`` first among
+    those ready (ties: the smaller id), into ``out``; returns how many."""
+    T = todo.shape[0]
+    missing = np.zeros(T, dtype=np.int64)
+    keys = np.empty(T)
+    vals = np.empty(T, dtype=np.int64)
+    size = 0
+    for t in range(T):
+        if not todo[t]:
+            continue
+        for q in range(d.pred_ptr[t], d.pred_ptr[t + 1]):
+            if todo[d.pred_idx[q]]:
+                missing[t] += 1
+        if missing[t] == 0:
+            size = _heap_push(keys, vals, size, key[t], t)
+    n = 0
+    while size > 0:
+        t, size = _heap_pop(keys, vals, size)
+        out[n] = t
+        n += 1
+        for q in range(d.succ_ptr[t], d.succ_ptr[t + 1]):
+            s = d.succ_idx[q]
+            if todo[s]:
+                missing[s] -= 1
+                if missing[s] == 0:
+                    size = _heap_push(keys, vals, size, key[s], s)
+    return n
