@@ -151,7 +151,9 @@ def _static(p: Problem) -> _Static:
     if got is None:
         dur = p.mode_duration
         task_arm = np.zeros((p.n_tasks, p.n_arms), dtype=np.bool_)
-        task_arm[np.asarray(p.mode_task, dtype=np.int64), np.asarray(p.mode_arm, dtype=np.int64)] = True
+        task_arm[
+            np.asarray(p.mode_task, dtype=np.int64), np.asarray(p.mode_arm, dtype=np.int64)
+        ] = True
         got = _Static(
             tuple(p.topological_order),
             task_arm,
