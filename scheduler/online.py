@@ -222,9 +222,7 @@ def _resolve(
         arm_lb[a] = max(arm_lb[a], float(until))
     # the frozen prefix, committed in start order
     # (exactly where it was: each after its arm's frozen tasks so far)
-    base = inst.take_state()
-    for empty, field_ in zip(inst.layout(), base, strict=True):
-        np.copyto(field_, empty)  # empty, in a state an earlier call gave back
+    base = inst.new_state()
     if frozen:
         ts = sorted(frozen, key=lambda t: (frozen[t][1], t))
         fw = np.zeros((len(ts), max(inst.max_borders, 1)))
@@ -317,7 +315,6 @@ def _resolve(
     sched = sched.bind(p)
     tv = time.perf_counter()
     mk = validate(p, sched) if check else float(sol.makespan)
-    ev.retire(sol)  # its states serve the next call on this problem
     te = time.perf_counter()
     took = te - tp
     stats.phases.update(

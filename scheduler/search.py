@@ -323,39 +323,8 @@ class Evaluator:
         return self._root_state
 
     def _fresh(self) -> State:
-        """A state to decode into: a recycled one (:meth:`recycle`), one
-        another search gave back (:meth:`Instance.take_state`) or a new one."""
-        return self._spare.pop() if self._spare else self.inst.take_state()
-
-    def retire(self, *sols: Solution) -> None:
-        """Give the states of this evaluator back to its instance for later
-        searches (:meth:`Instance.give_back`): the recycled ones, the
-        anchor's, those of ``sols`` and the base's. The evaluator is done
-        (it has no base any more), and the solutions it returned have no
-        state (a schedule built from them, :meth:`schedule`, is kept).
-
-        Parameters
-        ----------
-        *sols : Solution
-            Solutions of this evaluator the caller drops too.
-        """
-        held = [x for x in (self._anchor_sol, self._last_sol, *sols) if x is not None]
-        states = list(self._spare)
-        self._spare.clear()
-        for sol in held:
-            if sol.state is not None:
-                states.append(sol.state)
-                sol.state = None
-        if self.base is not None:
-            states.append(self.base)
-            self.base = None
-        self._root_state = None
-        self._anchor_order = self._anchor_modes = self._anchor_sol = self._last_sol = None
-        seen: set[int] = set()
-        for st in states:
-            if id(st) not in seen:
-                seen.add(id(st))
-                self.inst.give_back(st)
+        """A state to decode into: a recycled one (:meth:`recycle`) or a new one."""
+        return self._spare.pop() if self._spare else self.inst.new_state()
 
     def recycle(self, sol: Solution) -> None:
         """Let :meth:`evaluate_resume` decode into the state of ``sol``, a

@@ -425,8 +425,6 @@ class Instance:
         nb = max(self.max_borders, 1)
         self.scratch = Scratch(np.zeros(nb), np.zeros(nb + 1), np.zeros(nb), np.zeros(nb + 1))
         self._empty: State | None = None
-        self.spare_states: list[State] = []
-        """States no search uses any more (:meth:`give_back`), overwritten by the next ones."""
         A = problem.n_arms
         self._width = problem.n_modes + A
         per_task = int(np.diff(self.data.tm_ptr).max(initial=1))
@@ -592,32 +590,6 @@ class Instance:
         if self._empty is None:
             self._empty = self._build_empty()
         return self._empty.copy()
-
-    def take_state(self) -> State:
-        """A state to overwrite: one given back (:meth:`give_back`), holding
-        whatever it held, or a new empty one. Reusing them spares the
-        allocation of a large state (and its first touch) per decode.
-
-        Returns
-        -------
-        State
-        """
-        try:
-            return self.spare_states.pop()
-        except IndexError:
-            return self.new_state()
-
-    def give_back(self, st: State) -> None:
-        """Keep ``st`` for :meth:`take_state` (a few at most): the caller
-        holds no reference to it any more.
-
-        Parameters
-        ----------
-        st : State
-            A state of this instance.
-        """
-        if len(self.spare_states) < 8 and len(st.t_start) == self.n_tasks:
-            self.spare_states.append(st)
 
     def layout(self) -> State:
         """The empty partial schedule itself, shared: for the shapes and

@@ -221,26 +221,3 @@ def test_the_collector_is_held_off_during_the_call_and_restored_after() -> None:
     finally:
         gc.callbacks.remove(count)
         gc.enable()
-
-
-def test_calls_on_one_problem_share_no_state_with_their_plans() -> None:
-    # a call gives its decoder states back to the problem's compiled instance
-    # and the next call decodes into them: plans already returned are left
-    # alone, and a call gives the same plan whatever ran before it
-    for seed, blocking in ((3, True), (4, False)):
-        s = _situation(seed, blocking)
-        p, kw = s["p"], s["kw"]
-        first = reschedule(p, seed=1, evaluations=12, **kw)
-        assert first.schedule is not None
-        kept = (first.schedule.start.copy(), first.schedule.mode.copy(), first.schedule.end.copy())
-        other = reschedule(p, now=0.0, previous=kw["previous"], seed=2, evaluations=12)
-        assert other.schedule is not None
-        assert compile_problem(p).spare_states  # the states were given back
-        again = reschedule(p, seed=1, evaluations=12, **kw)
-        assert again.schedule is not None
-        now = (first.schedule.start, first.schedule.mode, first.schedule.end)
-        for a, b in zip(kept, now, strict=True):
-            assert np.array_equal(a, b)
-        assert np.array_equal(again.schedule.start, first.schedule.start)
-        assert np.array_equal(again.schedule.mode, first.schedule.mode)
-        validate(p, again.schedule)
