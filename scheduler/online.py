@@ -30,7 +30,6 @@ Examples
 
 from __future__ import annotations
 
-import heapq
 import math
 import time
 import weakref
@@ -41,7 +40,9 @@ from typing import Any
 import numpy as np
 
 from multiarm.errors import UsageError
+from multiarm.types import FloatArray, IntArray
 from scheduler.kernel import compile_problem
+from scheduler.kernel.api import keyed_order
 from scheduler.problem import Problem
 from scheduler.result import Result, SearchStats, SolveStatus
 from scheduler.schedule import Schedule, validate
@@ -161,6 +162,31 @@ def reschedule(
         Unknown tasks or arms in the state, or a frozen task whose
         predecessor is not frozen.
     """
+    return _resolve(
+        problem,
+        state,
+        None if previous is None else (previous.start, previous.mode),
+        time_limit=time_limit,
+        seed=seed,
+        waits=waits,
+        max_evaluations=max_evaluations,
+        check=check,
+    )
+
+
+def _resolve(
+    problem: Problem,
+    state: CellState,
+    warm: tuple[FloatArray, IntArray] | None,
+    *,
+    time_limit: float = 0.015,
+    seed: int = 0,
+    waits: bool = True,
+    max_evaluations: int | None = None,
+    check: bool = True,
+) -> Result:
+    """:func:`reschedule` with the warm start given as (starts, modes) arrays
+    (``scheduler.reschedule`` builds them without a schedule record)."""
     t0 = time.perf_counter()
     p = problem
     inst = compile_problem(p)
@@ -211,7 +237,9 @@ def reschedule(
             np.array([frozen[t][2] for t in ts], dtype=np.float64),
             fw,
         )
-    remaining = [t for t in range(p.n_tasks) if t not in frozen]
+    todo = np.ones(p.n_tasks, dtype=np.bool_)
+    todo[list(frozen)] = False
+    remaining = np.flatnonzero(todo)
     ev = _TimedEvaluator(
         p,
         waits=waits,
@@ -224,18 +252,16 @@ def reschedule(
     stats = SearchStats()
     t_state = time.perf_counter()
     # warm start: the previous order (by start) and modes where still allowed
-    key = np.zeros(p.n_tasks)
     modes = np.full(p.n_tasks, -1, dtype=np.int64)
-    if previous is not None:
-        key = -np.asarray(previous.start, dtype=float)
-        for t in remaining:
-            m = int(previous.mode[t])
-            modes[t] = m if allowed[m] else -1
+    if warm is not None:
+        first = np.asarray(warm[0], dtype=float)  # earlier start first
+        prev = np.asarray(warm[1], dtype=np.int64)[remaining]
+        modes[remaining] = np.where(allowed[prev], prev, -1)
     else:
-        key = rank_upward(p)
+        first = -rank_upward(p)  # larger rank first
     for t, (m, *_rest) in frozen.items():
         modes[t] = m
-    order = _order(p, remaining, key)
+    order = keyed_order(inst, todo, first)
     sol = ev.evaluate_resume(order, modes)
     if sol is None:  # a previous mode cannot be placed any more: let every task choose
         free = modes.copy()
@@ -247,7 +273,8 @@ def reschedule(
     # a cheap bound (the LP of lower_bound would eat the latency budget)
     mind = p.min_duration()
     lb = max(
-        [frozen[t][2] for t in frozen] + [float(release[t] + mind[t]) for t in remaining] + [0.0]
+        max((frozen[t][2] for t in frozen), default=0.0),
+        float(np.max(release[remaining] + mind[remaining], initial=0.0)),
     )
     if sol is None:
         stats.evaluations = ev.evaluations
@@ -269,7 +296,7 @@ def reschedule(
     # step took in the last calls on this problem (slower on a loaded machine)
     reserve = max(2e-4 + 1e-5 * p.n_tasks, 1.25 * _POST_COST.get(inst, 0.0))
     deadline = t0 + time_limit - reserve
-    if remaining and time.perf_counter() < deadline:
+    if len(remaining) and time.perf_counter() < deadline:
         # within a few milliseconds the list local search does better than the
         # tabu search here (measured over 60 failure events at 8 x 200: mean
         # makespan 314.1 against 315.4)
@@ -310,21 +337,3 @@ def reschedule(
         seed,
         stats,
     )
-
-
-def _order(p: Problem, tasks: list[int], key: np.ndarray) -> np.ndarray:
-    """``tasks`` in a topological order, larger ``key`` first among ready ones."""
-    todo = set(tasks)
-    missing = {t: sum(1 for q in p.task_preds[t] if q in todo) for t in tasks}
-    heap = [(-key[t], t) for t in tasks if missing[t] == 0]
-    heapq.heapify(heap)
-    out = []
-    while heap:
-        _, t = heapq.heappop(heap)
-        out.append(t)
-        for s in p.task_succs[t]:
-            if s in missing:
-                missing[s] -= 1
-                if missing[s] == 0:
-                    heapq.heappush(heap, (-key[s], s))
-    return np.array(out, dtype=np.int64)

@@ -48,8 +48,7 @@ import numpy.typing as npt
 
 from multiarm.errors import UsageError, ValidationError
 from scheduler.kernel import Instance, compile_problem
-from scheduler.online import CellState
-from scheduler.online import reschedule as _online
+from scheduler.online import CellState, _resolve
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule, ScheduleError
 
@@ -133,13 +132,11 @@ class _Static:
 
     topo: tuple[int, ...]
     """The tasks in topological order."""
-    arms: tuple[frozenset[int], ...]
-    """Per task, the arms of its modes."""
+    task_arm: npt.NDArray[np.bool_]
+    """(T, A): whether a task has a mode on an arm."""
     fastest: tuple[tuple[int, ...], ...]
     """Per task, its modes fastest first (ties: smaller id)."""
     mode_arm: npt.NDArray[np.int64]
-    borders: npt.NDArray[np.int64]
-    """Per mode, its number of borders."""
     span: float
     """Seconds between two dropped tasks' positions."""
 
@@ -153,15 +150,18 @@ def _static(p: Problem) -> _Static:
     got = _STATIC.get(inst)
     if got is None:
         dur = p.mode_duration
+        task_arm = np.zeros((p.n_tasks, p.n_arms), dtype=np.bool_)
+        task_arm[
+            np.asarray(p.mode_task, dtype=np.int64), np.asarray(p.mode_arm, dtype=np.int64)
+        ] = True
         got = _Static(
             tuple(p.topological_order),
-            tuple(frozenset(int(p.mode_arm[m]) for m in ms) for ms in p.task_modes),
+            task_arm,
             tuple(
                 tuple(sorted((int(m) for m in ms), key=lambda m: (float(dur[m]), m)))
                 for ms in p.task_modes
             ),
             np.asarray(p.mode_arm, dtype=np.int64),
-            np.array([len(p.shapes[m].borders) for m in range(p.n_modes)], dtype=np.int64),
             2.0 * float(np.sum(dur)) + 1e4,
         )
         _STATIC[inst] = got
@@ -175,19 +175,23 @@ def _dropped(
     arms_out: AbstractSet[int],
     parts_late: Mapping[int, float],
 ) -> set[int]:
-    """Tasks that can never run (frozen tasks never are)."""
+    """Tasks that can never run (frozen tasks never are): the failed ones,
+    those whose part never comes or whose every arm is out, and every task
+    after one of them (its successors, transitively)."""
     st = _static(p)
+    seeds = [int(t) for t in failed]
+    seeds += [int(t) for t, r in parts_late.items() if math.isinf(r)]
+    if arms_out:
+        working = np.ones(p.n_arms, dtype=np.bool_)
+        working[[int(a) for a in arms_out]] = False
+        seeds += np.flatnonzero(~(st.task_arm & working).any(axis=1)).tolist()
     out: set[int] = set()
-    for t in st.topo:
-        if t in frozen:
+    while seeds:
+        t = seeds.pop()
+        if t in out or t in frozen:
             continue
-        if (
-            t in failed
-            or math.isinf(parts_late.get(t, 0.0))
-            or st.arms[t] <= arms_out
-            or any(q in out for q in p.task_preds[t])
-        ):
-            out.add(t)
+        out.add(t)
+        seeds.extend(p.task_succs[t])
     return out
 
 
@@ -299,7 +303,6 @@ def reschedule(
     T = p.n_tasks
     mode = np.array(previous.mode, dtype=np.int64)
     start = np.array(previous.start, dtype=float)
-    waits = list(previous.waits)
     live = np.ones(T, dtype=np.bool_)
     live[[int(t) for t in frozen]] = False
     dead_mask = np.zeros(T, dtype=np.bool_)
@@ -310,7 +313,6 @@ def reschedule(
         # a dropped task: its fastest mode; else its fastest mode on a working arm
         m = next(m for m in st.fastest[t] if dead_mask[t] or not arm_out[st.mode_arm[m]])
         mode[t] = m
-        waits[t] = np.zeros(int(st.borders[m]))
     span = st.span
     for k, t in enumerate(x for x in st.topo if x in dead):
         releases[t] = start[t] = _FAR + k * span
@@ -322,17 +324,16 @@ def reschedule(
         )
     else:
         state = CellState(time=now, done=frozen, releases=releases, failed_arms=set(out))
-    warm = Schedule(mode, start, previous.end, tuple(waits), previous.blocking)
     t0 = time.perf_counter()
     new: Schedule | None = None
     err = ""
     phases: dict[str, float] = {"prepare": t0 - t_in}
     for limit in (evaluations, 1):
         try:
-            res = _online(
+            res = _resolve(
                 p,
                 state,
-                warm,
+                (start, mode),
                 time_limit=time_limit,
                 seed=seed,
                 max_evaluations=limit,

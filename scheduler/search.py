@@ -29,17 +29,19 @@ import numpy as np
 
 from multiarm.errors import InternalError
 from multiarm.types import FloatArray, IntArray
-from scheduler.kernel import State, compile_problem, decode, to_schedule
+from scheduler.kernel import Ctx, State, compile_problem, decode, to_schedule
 from scheduler.kernel import place_blocking as kernel_place_blocking
 from scheduler.kernel.moves_jit import BEFORE, LIST, MODE, chrono_extend, neighbour_moves
 from scheduler.kernel.resume import (
+    ResumeWork,
     Snaps,
     chunk_size,
     copy_rows,
     decode_resume,
     new_flags,
     new_snaps,
-    restore,
+    new_work,
+    resume_chrono,
 )
 from scheduler.problem import Problem
 from scheduler.schedule import Schedule
@@ -114,6 +116,12 @@ def priority_order(
     return np.array(out, dtype=np.int64)
 
 
+def _copy_state(src: State, dst: State) -> None:
+    """Every field of ``src`` copied into ``dst`` (arrays of the same shapes)."""
+    for a, b in zip(src, dst, strict=True):
+        np.copyto(b, a)
+
+
 class Evaluator:
     """Decodes solutions of one problem and counts the evaluations.
 
@@ -163,6 +171,10 @@ class Evaluator:
         self._last_sol: Solution | None = None
         self._last_k = -1
         self._root_state: State | None = None
+        self._ctx: Ctx | None = None
+        self._work: ResumeWork | None = None
+        self._spare: list[State] = []
+        """States of recycled solutions (:meth:`recycle`), overwritten by the next decodes."""
 
     # ---------------------------------------------------------- decoding
     def decode(
@@ -226,54 +238,72 @@ class Evaluator:
             buffer = new_flags if self.chrono else new_snaps
             self._snaps = buffer(self.inst, n, self._every)
             self._scratch = buffer(self.inst, n, self._every)
+            self._work = new_work(self.inst, n)
             self._snap_n = n
             self._anchor_order = self._anchor_modes = self._anchor_sol = None
-        snaps, scratch = self._snaps, self._scratch
-        if snaps is None or scratch is None:
+        snaps, scratch, work = self._snaps, self._scratch, self._work
+        if snaps is None or scratch is None or work is None:
             raise InternalError("snapshot buffers missing")
         fixed = np.full(T, -1, dtype=np.int64) if modes is None else modes
-        k_from = -1
+        if self._ctx is None:
+            self._ctx = self.inst.ctx(
+                chrono=self.chrono,
+                waits=self.waits,
+                blocking=self.blocking,
+                release=self.release,
+                allowed=self.allowed,
+                arm_lb=self.arm_lb,
+            )
         ao, am = self._anchor_order, self._anchor_modes
-        if ao is not None and am is not None:
-            diff = np.flatnonzero(order != ao)
-            p0 = int(diff[0]) if len(diff) else n
-            dm = np.flatnonzero(fixed[order] != am[order])
-            if len(dm):
-                p0 = min(p0, int(dm[0]))
-            k = p0 // self._every
-            while k > 0 and not snaps.ok[k]:
-                k -= 1
-            k_from = k
         self.evaluations += 1
-        state = self.base.copy() if (k_from < 0 and self.base is not None) else None
+        state = self._fresh()
         if self.chrono:
-            root = self._root()
+            # one compiled call: where to resume, the boundary restored, the decode
             anchor = self._anchor_sol
-            if k_from < 0 or anchor is None or anchor.state is None or ao is None:
-                k_from = -1
-                state = root.copy()
-            else:
-                state = restore(
-                    self.inst, root, anchor.state, ao, k_from * self._every, self.inst.new_state()
-                )
-        code, st = decode_resume(
-            self.inst,
-            order,
-            fixed,
-            snaps,
-            scratch,
-            k_from,
-            every=self._every,
-            state=state,
-            chrono=self.chrono,
-            waits=self.waits,
-            release=self.release,
-            allowed=self.allowed,
-            arm_lb=self.arm_lb,
-            states=not self.chrono,
-        )
+            held = anchor.state if anchor is not None else None
+            code, k_from = resume_chrono(
+                self.inst,
+                self._ctx,
+                self._root(),
+                None if ao is None or am is None or held is None else (held, ao, am),
+                np.ascontiguousarray(order, dtype=np.int64),
+                np.ascontiguousarray(fixed, dtype=np.int64),
+                snaps,
+                scratch,
+                self._every,
+                state,
+                work,
+            )
+            st = state
+        else:
+            k_from = -1
+            if ao is not None and am is not None:
+                diff = np.flatnonzero(order != ao)
+                p0 = int(diff[0]) if len(diff) else n
+                dm = np.flatnonzero(fixed[order] != am[order])
+                if len(dm):
+                    p0 = min(p0, int(dm[0]))
+                k = p0 // self._every
+                while k > 0 and not snaps.ok[k]:
+                    k -= 1
+                k_from = k
+            if k_from < 0:
+                # a snapshot (k_from >= 0) is loaded over the whole state
+                _copy_state(self._root(), state)
+            code, st = decode_resume(
+                self.inst,
+                order,
+                fixed,
+                snaps,
+                scratch,
+                k_from,
+                every=self._every,
+                state=state,
+                ctx=self._ctx,
+            )
         self._last_sol = None
         if code != 0:
+            self._spare.append(st)
             return None
         sol = Solution(
             order.copy(),
@@ -291,6 +321,29 @@ class Evaluator:
         if self._root_state is None:
             self._root_state = self.base if self.base is not None else self.inst.new_state()
         return self._root_state
+
+    def _fresh(self) -> State:
+        """A state to decode into: a recycled one (:meth:`recycle`) or a new one."""
+        return self._spare.pop() if self._spare else self.inst.new_state()
+
+    def recycle(self, sol: Solution) -> None:
+        """Let :meth:`evaluate_resume` decode into the state of ``sol``, a
+        solution the caller drops (it must hold no other reference to it):
+        ``sol`` loses its state. The anchor (:meth:`anchor`) is never
+        recycled; a solution without a state is left alone.
+
+        Parameters
+        ----------
+        sol : Solution
+        """
+        st = sol.state
+        if st is None or sol is self._anchor_sol or st is self._root_state or st is self.base:
+            return
+        if sol is self._last_sol:
+            self._last_sol = None  # it can no longer become the anchor
+        sol.state = None
+        if len(self._spare) < 4:
+            self._spare.append(st)
 
     def anchor(self, sol: Solution) -> bool:
         """Make ``sol`` the list that :meth:`evaluate_resume` resumes from.
@@ -641,6 +694,7 @@ def local_search(
                 ev.anchor(cur)
                 improved = True
                 break
+            ev.recycle(cand)  # its state is decoded over by the next move
         if cur.key() < best.key():
             best = cur
             stall = 0

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["EPS", "INF", "drop_stale_cache", "jit_enabled", "njit"]
+__all__ = ["EPS", "INF", "NO_REFCOUNT", "drop_stale_cache", "jit_enabled", "njit"]
 
 EPS = 1e-9
 """Overlaps and time differences below this (seconds) do not count."""
@@ -33,6 +33,19 @@ if _NO_JIT:  # pragma: no cover - exercised by the kernel benchmark and test in 
 
 else:
     from numba import njit
+    from numba.core.cpu import CPUTargetOptions
+
+NO_REFCOUNT: dict[str, Any] = (
+    {"_nrt": False} if not _NO_JIT and hasattr(CPUTargetOptions, "_nrt") else {}
+)
+"""Options of :func:`njit` for kernel functions that only read and write the
+arrays they are given (no new array, no view of one): compiled without
+numba's runtime, so without the atomic reference counts numba otherwise
+keeps on every array a function binds or passes on (its pruning leaves them
+in code with branches and loops, where they cost more than the placement
+itself). numba refuses to compile such a function that would need its
+runtime ("NRT required but not enabled"), so a mistake cannot go unnoticed.
+``{}`` where numba has no such option (then they count references as usual)."""
 
 
 def jit_enabled() -> bool:

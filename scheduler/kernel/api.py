@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from multiarm.errors import UsageError
-from multiarm.types import FloatArray, IntArray
+from multiarm.types import BoolArray, FloatArray, IntArray
 from scheduler.kernel._jit import jit_enabled
 from scheduler.kernel.arrays import Instance, State, compile_problem
 from scheduler.kernel.critical import _chain, cheapest_slot, critical_chain
@@ -32,22 +32,34 @@ from scheduler.kernel.passes import (
     _decode,
     _expand,
     _expand_blocking,
+    _keyed_order,
     _place_one,
     _seq_decode,
 )
 from scheduler.kernel.place import MISSING, PLACED
 from scheduler.kernel.resume import (
     _decode_chunks,
+    _resume_chrono,
     chunk_size,
     copy_rows,
     decode_resume,
     new_flags,
     new_snaps,
+    new_work,
     restore,
+    resume_chrono,
 )
 from scheduler.problem import Model, Window
 
-__all__ = ["decode", "expand", "expand_blocking", "place_blocking", "seq_decode", "warm_up"]
+__all__ = [
+    "decode",
+    "expand",
+    "expand_blocking",
+    "keyed_order",
+    "place_blocking",
+    "seq_decode",
+    "warm_up",
+]
 
 log = logging.getLogger("scheduler.kernel")
 
@@ -133,6 +145,34 @@ def decode(
         if code != RESUME:
             return code, st
         inst.answer_misses()
+
+
+def keyed_order(inst: Instance, todo: BoolArray, key: FloatArray) -> IntArray:
+    """The tasks ``todo`` marks in a topological order, the smallest ``key``
+    first among the ready ones (ties: the smaller id); predecessors outside
+    ``todo`` count as done.
+
+    Parameters
+    ----------
+    inst : Instance
+    todo : (T,) bool
+    key : (T,) float
+
+    Returns
+    -------
+    (n,) int
+        Every task ``todo`` marks (fewer only if the precedence has a cycle).
+    """
+    out = np.empty(inst.n_tasks, dtype=np.int64)
+    n = int(
+        _keyed_order(
+            inst.data,
+            np.ascontiguousarray(todo, dtype=np.bool_),
+            np.ascontiguousarray(key, dtype=np.float64),
+            out,
+        )
+    )
+    return out[:n]
 
 
 def expand(
@@ -389,6 +429,8 @@ def _cached_on_disk() -> bool:
         _seq_decode,
         _chain,
         _decode_chunks,
+        _resume_chrono,
+        _keyed_order,
         _neighbour_moves,
     ):
         cache = getattr(fn, "_cache", None)
@@ -480,6 +522,14 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         decode_resume(
             inst, order, free, flags, flags, 0, every=every, state=back, chrono=True, states=False
         )
+        # the same in one compiled call (the local search's chronological decoder)
+        cx = inst.ctx(chrono=True, blocking=p.blocking is not None)
+        work = new_work(inst, len(order))
+        resume_chrono(inst, cx, root, None, order, free, flags, flags, every, back, work)
+        resume_chrono(
+            inst, cx, root, (fin, order, free), order, free, flags, flags, every, back, work
+        )
+        keyed_order(inst, np.ones(p.n_tasks, dtype=np.bool_), np.zeros(p.n_tasks))
         critical_chain(inst, st3)
         rng = np.random.default_rng(0)
         pos = np.arange(len(order), dtype=np.int64)

@@ -17,6 +17,7 @@ tasks are ``arm_t[arm_lo[a] : arm_lo[a] + arm_n[a]]``, sorted by start.
 
 from __future__ import annotations
 
+import bisect
 import weakref
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -70,6 +71,8 @@ class Arrays(NamedTuple):
         and the segment where holding them began
     tool_ptr, tool_res : each mode's tools
     ex_ptr, ex_res, ex_s, ex_e, ex_move : each mode's merged windows
+    ex_b0, ex_b1 : per window, how many of its mode's borders are ``<= s``
+        and ``< e`` (the waits before it start and end are prefix sums)
     bd_ptr, bd_val : each mode's borders (offsets, seconds)
     start_ptr, start_res : each arm's exclusive start zones
     res_lo : (R,) int64, each resource's slice of the timelines
@@ -111,6 +114,8 @@ class Arrays(NamedTuple):
     ex_s: FloatArray
     ex_e: FloatArray
     ex_move: BoolArray
+    ex_b0: IntArray
+    ex_b1: IntArray
     bd_ptr: IntArray
     bd_val: FloatArray
     start_ptr: IntArray
@@ -184,13 +189,15 @@ class Scratch(NamedTuple):
     """Work buffers of one instance: waits of the last query (``w``), segment
     starts (``tau``), the best waits so far (``best_w``), the earliest start
     of each segment (``floor``), the waits of another placement of the same
-    query (``w2``), all float64."""
+    query (``w2``), the prefix sums of the waits a placement records
+    (``cw``), all float64."""
 
     w: FloatArray
     tau: FloatArray
     best_w: FloatArray
     floor: FloatArray
     w2: FloatArray
+    cw: FloatArray
 
 
 class OracleTable(NamedTuple):
@@ -245,6 +252,8 @@ def _compile(p: Problem) -> tuple[Arrays, int, int, int]:
     tm_ptr, tm_idx = csr(p.task_modes)
     rp_res, rp_s, rp_e, rp_ptr = [], [], [], [0]
     ex_res, ex_s, ex_e, ex_mv, ex_ptr = [], [], [], [], [0]
+    ex_b0: list[int] = []
+    ex_b1: list[int] = []
     bd_val: list[float] = []
     bd_ptr = [0]
     tool_res, tool_ptr = [], [0]
@@ -278,6 +287,10 @@ def _compile(p: Problem) -> tuple[Arrays, int, int, int]:
             rp_e.append(d)
             tool_res.append(r)
         rp_ptr.append(len(rp_res))
+        # borders increase: those <= s (and < e) are a prefix of them
+        for q in range(ex_ptr[-1], len(ex_res)):
+            ex_b0.append(bisect.bisect_right(sh.borders, ex_s[q]))
+            ex_b1.append(bisect.bisect_left(sh.borders, ex_e[q]))
         ex_ptr.append(len(ex_res))
         tool_ptr.append(len(tool_res))
         bd_val.extend(sh.borders)
@@ -365,6 +378,8 @@ def _compile(p: Problem) -> tuple[Arrays, int, int, int]:
         ex_s=_a(ex_s, f64),
         ex_e=_a(ex_e, f64),
         ex_move=_a(ex_mv, np.bool_),
+        ex_b0=_a(ex_b0, i64),
+        ex_b1=_a(ex_b1, i64),
         bd_ptr=_a(bd_ptr, i64),
         bd_val=_a(bd_val, f64),
         start_ptr=start_ptr,
@@ -413,7 +428,12 @@ class Instance:
         self.n_arms = problem.n_arms
         nb = max(self.max_borders, 1)
         self.scratch = Scratch(
-            np.zeros(nb), np.zeros(nb + 1), np.zeros(nb), np.zeros(nb + 1), np.zeros(nb)
+            np.zeros(nb),
+            np.zeros(nb + 1),
+            np.zeros(nb),
+            np.zeros(nb + 1),
+            np.zeros(nb),
+            np.zeros(nb + 1),
         )
         self._empty: State | None = None
         A = problem.n_arms
@@ -582,6 +602,19 @@ class Instance:
             self._empty = self._build_empty()
         return self._empty.copy()
 
+    def layout(self) -> State:
+        """The empty partial schedule itself, shared: for the shapes and
+        dtypes of a state's fields (never mutate it; :meth:`new_state` gives
+        a copy to work on).
+
+        Returns
+        -------
+        State
+        """
+        if self._empty is None:
+            self._empty = self._build_empty()
+        return self._empty
+
     def _build_empty(self) -> State:
         """The empty partial schedule (built once; :meth:`new_state` copies it)."""
         T, A = self.n_tasks, self.n_arms
@@ -723,7 +756,7 @@ class Instance:
         w = np.zeros(max(self.max_borders, 1))
         w[: len(waits)] = waits
         st.t_waits[t] = w
-        _commit(self.data, st, t, m, S, end, k, w)
+        _commit(self.data, st, t, m, S, end, k, w, self.scratch.cw)
 
     def commit_all(
         self,
@@ -755,6 +788,7 @@ class Instance:
             _a(starts, np.float64),
             _a(ends, np.float64),
             _a(waits, np.float64),
+            self.scratch.cw,
         )
 
 

@@ -43,10 +43,11 @@ def to_schedule(inst: Instance, st: State) -> Schedule:
     W = np.array(st.t_waits, dtype=np.float64)
     W.setflags(write=False)
     waits = [W[t, :k] for t, k in enumerate(nb.tolist())]
-    # duration plus waits, summed as ModeShape.length sums them
+    # duration plus waits, summed as ModeShape.length sums them: one after
+    # the other from the first (the zeros after a mode's borders add nothing)
     length = np.array(p.mode_duration, dtype=np.float64)[modes]
-    for t in np.flatnonzero(W.any(axis=1)).tolist():
-        length[t] = length[t] + sum(waits[t].tolist())
+    if W.size:
+        length = length + np.add.accumulate(W, axis=1)[:, -1]
     b = st.t_end - st.t_start - length
     blocking = np.where(b > 1e-12 * np.maximum(1.0, np.abs(st.t_end)), b, 0.0)
     # Schedule copies the mode, start and end arrays into read-only ones

@@ -143,16 +143,12 @@ def _reasons(d, st, t, prev, ptr, own_r, own_k, ordered, tol, out_kind, out_by):
         hi = lo + st.res_n[r]
         first = lo
         if ordered[r]:
-            # the first end >= s - tol (the scan below skips the earlier ones)
-            x0 = lo
-            x1 = hi
-            while x0 < x1:
-                mid = (x0 + x1) // 2
-                if st.tl_e[mid] >= s - tol:
-                    x1 = mid
-                else:
-                    x0 = mid + 1
-            first = x0
+            # the first end >= s - tol (the scan below skips the earlier ones):
+            # at or before t's own interval (it ends after s), so a few steps
+            # back from it find the first one, as a bisection would
+            first = own_k[i]
+            while first > lo and st.tl_e[first - 1] >= s - tol:
+                first -= 1
         # the scan stops at the first end past the start
         for k in range(first, hi):
             e = st.tl_e[k]
@@ -168,6 +164,14 @@ def _reasons(d, st, t, prev, ptr, own_r, own_k, ordered, tol, out_kind, out_by):
 
 
 @njit(cache=True)
+def _reason_space(st, own_k):
+    """Buffers (kinds, tasks) for :func:`_reasons`: room for every reason of any task."""
+    T = st.t_start.shape[0]
+    cap = T + 1 + own_k.shape[0] + st.tl_task.shape[0]
+    return np.empty(cap, dtype=np.int64), np.empty(cap, dtype=np.int64)
+
+
+@njit(cache=True)
 def _chain(d, st, u, tol):
     """The chain from the task that ends last (module docstring): tasks,
     reason codes and the tasks they wait for, as arrays of the chain's length.
@@ -177,9 +181,15 @@ def _chain(d, st, u, tol):
     ptr, own_r, own_k = _index(st, n_res, d.res_lo, T)
     prev = _prev_on_arm(st, d.arm_lo, d.arm_lo.shape[0], T)
     ordered = _sorted_ends(st, n_res, d.res_lo)
-    cap = T + 1 + own_k.shape[0] + st.tl_task.shape[0]
-    kind = np.empty(cap, dtype=np.int64)
-    by = np.empty(cap, dtype=np.int64)
+    kind, by = _reason_space(st, own_k)
+    return _chain_from(d, st, u, tol, ptr, own_r, own_k, prev, ordered, kind, by)
+
+
+@njit(cache=True)
+def _chain_from(d, st, u, tol, ptr, own_r, own_k, prev, ordered, kind, by):
+    """:func:`_chain` with the state's index (:func:`_index`,
+    :func:`_prev_on_arm`, :func:`_sorted_ends`) and the reason buffers given."""
+    T = st.t_start.shape[0]
     c_t = np.empty(T, dtype=np.int64)
     c_kind = np.empty(T, dtype=np.int64)
     c_by = np.empty(T, dtype=np.int64)

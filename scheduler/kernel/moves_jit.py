@@ -41,7 +41,15 @@ import numpy as np
 from multiarm.types import BoolArray, FloatArray, IntArray
 from scheduler.kernel._jit import njit
 from scheduler.kernel.arrays import Instance, State
-from scheduler.kernel.critical import TOL, _chain, _index, _prev_on_arm, _reasons, _sorted_ends
+from scheduler.kernel.critical import (
+    TOL,
+    _chain_from,
+    _index,
+    _prev_on_arm,
+    _reason_space,
+    _reasons,
+    _sorted_ends,
+)
 
 __all__ = ["AFTER", "BEFORE", "LIST", "MODE", "chrono_extend", "neighbour_moves"]
 
@@ -61,6 +69,60 @@ def _extend(d, st, order, pos, release, c_t, c_kind, c_by, rng, links, tol):
     held by the task before it in the list starting at the same time, that
     link becomes ``LIST`` and the chain goes on from there with that task's
     own reasons (several: one drawn with ``rng.integers``)."""
+    ptr = np.zeros(1, dtype=np.int64)
+    own_r = np.zeros(0, dtype=np.int64)
+    own_k = np.zeros(0, dtype=np.int64)
+    prev = np.zeros(0, dtype=np.int64)
+    ordered = np.zeros(0, dtype=np.bool_)
+    kind = np.zeros(0, dtype=np.int64)
+    by = np.zeros(0, dtype=np.int64)
+    return _extend_from(
+        d,
+        st,
+        order,
+        pos,
+        release,
+        c_t,
+        c_kind,
+        c_by,
+        rng,
+        links,
+        tol,
+        False,
+        ptr,
+        own_r,
+        own_k,
+        prev,
+        ordered,
+        kind,
+        by,
+    )
+
+
+@njit(cache=True)
+def _extend_from(
+    d,
+    st,
+    order,
+    pos,
+    release,
+    c_t,
+    c_kind,
+    c_by,
+    rng,
+    links,
+    tol,
+    built,
+    ptr,
+    own_r,
+    own_k,
+    prev,
+    ordered,
+    kind,
+    by,
+):
+    """:func:`_extend`; with ``built`` the state's index and the reason
+    buffers are given (else built at the first link through the list)."""
     T = st.t_start.shape[0]
     n0 = c_t.shape[0]
     cap = n0 + T + 1
@@ -74,14 +136,6 @@ def _extend(d, st, order, pos, release, c_t, c_kind, c_by, rng, links, tol):
         o_by[i] = c_by[i]
         seen[c_t[i]] = True
     n = n0
-    built = False
-    ptr = np.zeros(1, dtype=np.int64)
-    own_r = np.zeros(0, dtype=np.int64)
-    own_k = np.zeros(0, dtype=np.int64)
-    prev = np.zeros(0, dtype=np.int64)
-    ordered = np.zeros(0, dtype=np.bool_)
-    kind = np.zeros(0, dtype=np.int64)
-    by = np.zeros(0, dtype=np.int64)
     while n > 0 and o_kind[n - 1] == 3 and links > 0:
         t = o_t[n - 1]
         S = st.t_start[t]
@@ -205,12 +259,38 @@ def _neighbour_moves(d, st, order, modes, frozen, allowed, release, chrono, rng,
     among reasons), its continuation through the list, the shuffled moves."""
     T = st.t_start.shape[0]
     u = rng.random(T)
-    c_t, c_kind, c_by = _chain(d, st, u, tol)
+    # the state's index, built once for the chain and its continuation
+    n_res = d.res_lo.shape[0]
+    ptr, own_r, own_k = _index(st, n_res, d.res_lo, T)
+    prev = _prev_on_arm(st, d.arm_lo, d.arm_lo.shape[0], T)
+    ordered = _sorted_ends(st, n_res, d.res_lo)
+    kind, by = _reason_space(st, own_k)
+    c_t, c_kind, c_by = _chain_from(d, st, u, tol, ptr, own_r, own_k, prev, ordered, kind, by)
     pos = np.full(T, -1, dtype=np.int64)
     for i in range(order.shape[0]):
         pos[order[i]] = i
     if chrono:
-        c_t, c_kind, c_by = _extend(d, st, order, pos, release, c_t, c_kind, c_by, rng, T, tol)
+        c_t, c_kind, c_by = _extend_from(
+            d,
+            st,
+            order,
+            pos,
+            release,
+            c_t,
+            c_kind,
+            c_by,
+            rng,
+            T,
+            tol,
+            True,
+            ptr,
+            own_r,
+            own_k,
+            prev,
+            ordered,
+            kind,
+            by,
+        )
     return _moves(d, c_t, c_kind, c_by, pos, modes, frozen, allowed, rng)
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scheduler.kernel._jit import EPS, INF, njit
+from scheduler.kernel._jit import EPS, INF, NO_REFCOUNT, njit
 from scheduler.kernel.place import (
     MISSING,
     PLACED,
@@ -35,7 +35,7 @@ RESUME = 1
 """Return code of :func:`_decode`: oracle answers are missing, call again."""
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _decode(d, st, cx, sc, ot, pending, fixed, cursor):
     """Place ``pending[:cursor[0]]`` one task after another; ``fixed[t] >= 0``
     forces a mode, -1 picks the earliest-finishing one (ties: less waiting
@@ -131,7 +131,7 @@ def _decode(d, st, cx, sc, ot, pending, fixed, cursor):
                 continue
             for j in range(nbmax):
                 t_waits[t, j] = best_w[j]
-            _commit(d, st, t, bm, bS, best, bk, best_w)
+            _commit(d, st, t, bm, bS, best, bk, best_w, sc.cw)
             placed += 1
         if kept == n:
             return -(placed + 1)
@@ -141,7 +141,7 @@ def _decode(d, st, cx, sc, ot, pending, fixed, cursor):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _expand(d, st, cx, sc, cand_t, cand_m, out_S, out_end, out_k, out_w, out_waits):
     """Query many (task, mode) candidates against one state (read-only)."""
     nbmax = out_waits.shape[1]
@@ -168,7 +168,7 @@ def _expand(d, st, cx, sc, cand_t, cand_m, out_S, out_end, out_k, out_w, out_wai
         out_w[i] = wsum
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _expand_blocking(
     d, st, cx, sc, ot, cand_t, cand_m, out_S, out_end, out_k, out_w, out_waits, out_c
 ):
@@ -201,7 +201,7 @@ def _expand_blocking(
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _place_one(d, st, sc, ot, t, m, S0, use_waits, arm_lb, out):
     """One blocking placement; ``out`` = (start, end, slot, cost); returns the status."""
     status, S, end, k, c = _place_blocking(d, st, sc, ot, t, m, S0, use_waits, arm_lb)
@@ -325,7 +325,7 @@ def _seq_decode(d, st, cx, sc, seq, seq_n, modes, order_out):
         for j in range(nbmax):
             best_w[j] = waits_out[j] if (use_waits and j < nb) else 0.0
             t_waits[t, j] = best_w[j]
-        _commit(d, st, t, m, S, end, k, best_w)
+        _commit(d, st, t, m, S, end, k, best_w, sc.cw)
         order_out[placed] = t
         placed += 1
         for q in range(succ_ptr[t], succ_ptr[t + 1]):
@@ -353,3 +353,35 @@ def _seq_decode(d, st, cx, sc, seq, seq_n, modes, order_out):
                         est = t_end[pred_idx[r]]
                 size = _heap_push(keys, vals, size, est, s)
     return placed
+
+
+@njit(cache=True)
+def _keyed_order(d, todo, key, out):
+    """The tasks ``todo`` marks in a topological order (predecessors outside
+    ``todo`` count as done), the one with the smallest ``key`` first among
+    those ready (ties: the smaller id), into ``out``; returns how many."""
+    T = todo.shape[0]
+    missing = np.zeros(T, dtype=np.int64)
+    keys = np.empty(T)
+    vals = np.empty(T, dtype=np.int64)
+    size = 0
+    for t in range(T):
+        if not todo[t]:
+            continue
+        for q in range(d.pred_ptr[t], d.pred_ptr[t + 1]):
+            if todo[d.pred_idx[q]]:
+                missing[t] += 1
+        if missing[t] == 0:
+            size = _heap_push(keys, vals, size, key[t], t)
+    n = 0
+    while size > 0:
+        t, size = _heap_pop(keys, vals, size)
+        out[n] = t
+        n += 1
+        for q in range(d.succ_ptr[t], d.succ_ptr[t + 1]):
+            s = d.succ_idx[q]
+            if todo[s]:
+                missing[s] -= 1
+                if missing[s] == 0:
+                    size = _heap_push(keys, vals, size, key[s], s)
+    return n

@@ -25,7 +25,12 @@ of already placed tasks, finds the earliest start ``S >= S0`` such that
 listed as misses for Python to answer).
 
 Intervals on a resource never overlap, so they are sorted by end too, and a
-binary search finds the first conflict. The placement functions take the
+binary search finds the first conflict; a piece that starts after the
+resource's last end (the common case: most of what a timeline holds is over
+before a new task's piece) is free without one. A placement records its
+intervals with the prefix sums of its waits (the borders increase, so the
+waits before an offset are a prefix of them), as :mod:`scheduler.timing`
+computes them. The placement functions take the
 bundled tuples of :mod:`scheduler.kernel.arrays`: ``d`` (Arrays), ``st``
 (State), ``sc`` (Scratch), ``ot`` (OracleTable), and bind the fields they use
 to locals on entry (reading tuple fields inside the hot loops measured 1.5-2x
@@ -36,7 +41,7 @@ from __future__ import annotations
 
 import math
 
-from scheduler.kernel._jit import EPS, INF, njit
+from scheduler.kernel._jit import EPS, INF, NO_REFCOUNT, njit
 
 __all__: list[str] = []
 
@@ -70,7 +75,7 @@ def _setup(kind, table, arm_off, arm_count, slot, mode_of, a, prev, nxt):
     return table[6 * M + 4 * A + a] + dist / table[6 * M + 3 * A + a]
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _first_conflict(tl_s, tl_e, tl_own, lo, n, x, y, arm):
     """Index of the first interval of [lo, lo+n) overlapping [x, y) owned by
     another arm, or -1. Overlaps below EPS do not count."""
@@ -92,7 +97,7 @@ def _first_conflict(tl_s, tl_e, tl_own, lo, n, x, y, arm):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _fit(p_res, p_s, p_e, p0, p1, t0, arm, tl_s, tl_e, tl_own, res_lo, res_n):
     """Least t >= t0 such that every piece [t + s, t + e) of p0..p1 is free."""
     t = t0
@@ -101,7 +106,9 @@ def _fit(p_res, p_s, p_e, p0, p1, t0, arm, tl_s, tl_e, tl_own, res_lo, res_n):
         for i in range(p0, p1):
             r = p_res[i]
             n = res_n[r]
-            if n == 0:
+            # nothing held, or everything held ends by the piece's start (the
+            # ends are in order): the common case, without the bisection
+            if n == 0 or tl_e[res_lo[r] + n - 1] <= t + p_s[i] + EPS:
                 continue
             k = _first_conflict(tl_s, tl_e, tl_own, res_lo[r], n, t + p_s[i], t + p_e[i], arm)
             if k >= 0:
@@ -113,7 +120,7 @@ def _fit(p_res, p_s, p_e, p0, p1, t0, arm, tl_s, tl_e, tl_own, res_lo, res_n):
             return t
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _fit_waits(
     m,
     S0,
@@ -231,7 +238,7 @@ def _fit_waits(
             return S, taus[nseg - 1] + seg_len[seg0 + nseg - 1], moved
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _query(d, st, sc, t, m, S0, chrono, use_waits, extra, arm_lb):
     """Earliest placement of task t in mode m from S0: (start, end, arm slot);
     the waits are left in ``sc.w``."""
@@ -433,13 +440,15 @@ def _query(d, st, sc, t, m, S0, chrono, use_waits, extra, arm_lb):
     return INF, INF, -1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _insert(tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, s, e, own, task):
     """Insert interval [s, e) of ``own``/``task`` into resource r's timeline, sorted by start."""
     lo = res_lo[r]
     n = res_n[r]
     x = lo
     y = lo + n
+    if n > 0 and tl_s[y - 1] <= s:
+        x = y  # after every interval (chronological decoding's common case)
     while x < y:
         mid = (x + y) // 2
         if tl_s[mid] <= s:
@@ -458,9 +467,10 @@ def _insert(tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, s, e, own, task):
     res_n[r] = n + 1
 
 
-@njit(cache=True)
-def _commit(d, st, t, m, S, end, k, waits):
-    """Record task t in mode m at [S, end), slot k of its arm, with ``waits``."""
+@njit(cache=True, **NO_REFCOUNT)
+def _commit(d, st, t, m, S, end, k, waits, cw):
+    """Record task t in mode m at [S, end), slot k of its arm, with ``waits``
+    (``cw``: a buffer for their prefix sums, one more than the most borders)."""
     res_lo = d.res_lo
     res_n = st.res_n
     tl_s = st.tl_s
@@ -472,6 +482,8 @@ def _commit(d, st, t, m, S, end, k, waits):
     ex_s = d.ex_s
     ex_e = d.ex_e
     ex_move = d.ex_move
+    ex_b0 = d.ex_b0
+    ex_b1 = d.ex_b1
     a = d.mode_arm[m]
     st.t_start[t] = S
     st.t_end[t] = end
@@ -498,58 +510,63 @@ def _commit(d, st, t, m, S, end, k, waits):
                     tl_e[i] = max(dep, 0.0)
     b0 = d.bd_ptr[m]
     nb = d.bd_ptr[m + 1] - b0
+    # cw[j]: the waits at the first j borders, added in border order (the
+    # borders increase, so the waits before an offset are such a prefix:
+    # W<=(s) = cw[ex_b0], W<(e) = cw[ex_b1], as scheduler.timing sums them)
+    cw[0] = 0.0
+    for j in range(nb):
+        cw[j + 1] = cw[j] + waits[j]
     for i in range(d.ex_ptr[m], d.ex_ptr[m + 1]):
         r = ex_res[i]
         s = ex_s[i]
         e = ex_e[i]
+        j0 = ex_b0[i]
+        j1 = ex_b1[i]
         if not ex_move[i]:
-            ws = 0.0
-            we = 0.0
-            for j in range(nb):
-                b = bd_val[b0 + j]
-                if b <= s:
-                    ws += waits[j]
-                if b < e:
-                    we += waits[j]
-            _insert(tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, S + s + ws, S + e + we, a, t)
+            _insert(
+                tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, S + s + cw[j0], S + e + cw[j1], a, t
+            )
         else:
+            # the pieces between the borders inside it where the arm waits,
+            # each shifted by the waits before it
             p0 = s
-            wp = 0.0
-            for j in range(nb):
+            for j in range(j0, j1):
+                if waits[j] <= 0.0:
+                    continue
                 b = bd_val[b0 + j]
-                if b <= s:
-                    wp += waits[j]
-            for j in range(nb + 1):
-                if j < nb:
-                    b = bd_val[b0 + j]
-                    if not (s < b < e) or waits[j] <= 0.0:
-                        continue
-                    # piece [p0, b) then the wait at b
-                    _insert(
-                        tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, S + p0 + wp, S + b + wp, a, t
-                    )
-                    wp += waits[j]
-                    p0 = b
-                else:
-                    _insert(
-                        tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, S + p0 + wp, S + e + wp, a, t
-                    )
+                _insert(
+                    tl_s,
+                    tl_e,
+                    tl_own,
+                    tl_task,
+                    res_lo,
+                    res_n,
+                    r,
+                    S + p0 + cw[j],
+                    S + b + cw[j],
+                    a,
+                    t,
+                )
+                p0 = b
+            _insert(
+                tl_s, tl_e, tl_own, tl_task, res_lo, res_n, r, S + p0 + cw[j1], S + e + cw[j1], a, t
+            )
     for q in range(d.tool_ptr[m], d.tool_ptr[m + 1]):
         _insert(tl_s, tl_e, tl_own, tl_task, res_lo, res_n, d.tool_res[q], S, end, a, t)
 
 
 @njit(cache=True)
-def _commit_all(d, st, ts, ms, ss, es, ws):
+def _commit_all(d, st, ts, ms, ss, es, ws, cw):
     """Record tasks ``ts`` in modes ``ms`` at ``[ss, es)`` with waits ``ws``
     (rows), in this order, each after its arm's tasks so far."""
     for i in range(len(ts)):
         t = ts[i]
         m = ms[i]
         st.t_waits[t, :] = ws[i]
-        _commit(d, st, t, m, ss[i], es[i], st.arm_n[d.mode_arm[m]], ws[i])
+        _commit(d, st, t, m, ss[i], es[i], st.arm_n[d.mode_arm[m]], ws[i], cw)
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _earliest(d, st, t, chrono, release):
     """Earliest start of t: release, predecessors' ends (and the latest start if chronological)."""
     pred_idx = d.pred_idx
@@ -564,7 +581,7 @@ def _earliest(d, st, t, chrono, release):
     return S0
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _oracle_get(keys, vals, key):
     """The answer stored under ``key`` (open addressing, linear probing), NaN if none."""
     mask = keys.shape[0] - 1
@@ -578,7 +595,7 @@ def _oracle_get(keys, vals, key):
         i = (i + 1) & mask
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _oracle_put(keys, vals, fill, new_keys, new_vals):
     """Store answers (the table must have room: at most half full afterwards)."""
     mask = keys.shape[0] - 1
@@ -593,7 +610,7 @@ def _oracle_put(keys, vals, fill, new_keys, new_vals):
         vals[i] = new_vals[q]
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _blocking_cost(d, st, ot, m, S):
     """Detour cost of mode m starting at S: the sum over the other arms parked
     at S (initial pose, or the end of their last task) of the oracle's cost.
@@ -637,7 +654,7 @@ def _blocking_cost(d, st, ot, m, S):
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _place_blocking(d, st, sc, ot, t, m, S0, use_waits, arm_lb):
     """Chronological placement with the oracle's detour cost.
 

@@ -41,11 +41,22 @@ import numpy as np
 
 from multiarm.errors import UsageError
 from multiarm.types import BoolArray, FloatArray, IntArray
-from scheduler.kernel._jit import njit
-from scheduler.kernel.arrays import Instance, State
+from scheduler.kernel._jit import NO_REFCOUNT, njit
+from scheduler.kernel.arrays import Ctx, Instance, State
 from scheduler.kernel.passes import RESUME, _decode
 
-__all__ = ["Snaps", "chunk_size", "copy_rows", "decode_resume", "new_flags", "new_snaps", "restore"]
+__all__ = [
+    "ResumeWork",
+    "Snaps",
+    "chunk_size",
+    "copy_rows",
+    "decode_resume",
+    "new_flags",
+    "new_snaps",
+    "new_work",
+    "restore",
+    "resume_chrono",
+]
 
 
 class Snaps(NamedTuple):
@@ -237,28 +248,32 @@ def new_flags(inst: Instance, n: int, every: int) -> Snaps:
         Every field but ``ok`` has no columns.
     """
     rows = n // max(every, 1) + 1
-    st = inst.new_state()
     fields: list[Any] = [
-        np.zeros((rows, *(0 for _ in np.shape(x))), dtype=np.asarray(x).dtype) for x in st
+        np.zeros((rows, *(0 for _ in np.shape(x))), dtype=np.asarray(x).dtype)
+        for x in inst.layout()
     ]
     fields.append(np.zeros(rows, dtype=np.bool_))
     return Snaps._make(fields)
 
 
-@njit(cache=True)
-def _restore(d, root, fin, keep, st):
+@njit(cache=True, **NO_REFCOUNT)
+def _restore(d, root, fin, keep, st, has):
     """``st`` := ``root`` plus the intervals of the tasks ``keep`` marks in
-    ``fin`` (:func:`restore`)."""
+    ``fin`` (:func:`restore`); ``has`` (A,) bool is work space. Every field
+    ``st`` is read by is written (it may hold anything before)."""
     A = d.arm_lo.shape[0]
     T = fin.t_start.shape[0]
-    has = np.zeros(A, dtype=np.bool_)
+    nb = fin.t_waits.shape[1]
+    for a in range(A):
+        has[a] = False
     last = root.t_last[0]
     for t in range(T):
         if keep[t]:
             st.t_start[t] = fin.t_start[t]
             st.t_end[t] = fin.t_end[t]
             st.t_mode[t] = fin.t_mode[t]
-            st.t_waits[t] = fin.t_waits[t]
+            for j in range(nb):
+                st.t_waits[t, j] = fin.t_waits[t, j]
             has[d.mode_arm[fin.t_mode[t]]] = True
             if root.t_mode[t] < 0 and fin.t_start[t] > last:
                 last = fin.t_start[t]
@@ -266,6 +281,8 @@ def _restore(d, root, fin, keep, st):
             st.t_start[t] = np.nan
             st.t_end[t] = np.nan
             st.t_mode[t] = -1
+            for j in range(nb):
+                st.t_waits[t, j] = 0.0
     st.t_last[0] = last
     for a in range(A):
         lo = d.arm_lo[a]
@@ -303,6 +320,190 @@ def _restore(d, root, fin, keep, st):
         st.res_n[r] = n
 
 
+@njit(cache=True, **NO_REFCOUNT)
+def _first_change(order, fixed, ao, am):
+    """The first position where ``order`` or its modes (``fixed``) differ
+    from the anchor's (``ao``, ``am``); ``len(order)`` if none."""
+    n = order.shape[0]
+    for i in range(n):
+        t = order[i]
+        if t != ao[i] or fixed[t] != am[t]:
+            return i
+    return n
+
+
+@njit(cache=True)
+def _copy_state(src, dst):
+    dst.tl_s[:] = src.tl_s
+    dst.tl_e[:] = src.tl_e
+    dst.tl_own[:] = src.tl_own
+    dst.tl_task[:] = src.tl_task
+    dst.res_n[:] = src.res_n
+    dst.arm_t[:] = src.arm_t
+    dst.arm_n[:] = src.arm_n
+    dst.t_start[:] = src.t_start
+    dst.t_end[:] = src.t_end
+    dst.t_mode[:] = src.t_mode
+    dst.t_last[:] = src.t_last
+    dst.t_waits[:] = src.t_waits
+
+
+@njit(cache=True)
+def _resume_chrono(
+    d, st, cx, sc, ot, root, fin, ao, am, order, fixed, every, src, out, work, buf, outer, inner
+):
+    """:func:`resume_chrono`, compiled: on the first entry (``outer[4] == 0``)
+    the boundary to start from (``work.k[0]``: 1 if there is an anchor, in;
+    the boundary, out) and ``st`` restored there; then :func:`_decode_chunks`
+    (called again after missing oracle answers: it goes on where it stopped)."""
+    if outer[4] == 0:
+        k = -1
+        if work.k[0] == 1:
+            k = _first_change(order, fixed, ao, am) // every
+            while k > 0 and not src.ok[k]:
+                k -= 1
+        if k >= 0:
+            keep = work.keep
+            for t in range(keep.shape[0]):
+                keep[t] = root.t_mode[t] >= 0
+            for i in range(k * every):
+                keep[ao[i]] = True
+            _restore(d, root, fin, keep, st, work.has)
+        else:
+            _copy_state(root, st)
+        work.k[0] = k
+    return _decode_chunks(
+        d, st, cx, sc, ot, order, fixed, every, src, work.k[0], out, buf, outer, inner, False
+    )
+
+
+class ResumeWork(NamedTuple):
+    """Work space of :func:`resume_chrono` (one per list length).
+
+    Attributes
+    ----------
+    keep : (T,) bool
+    has : (A,) bool
+    k : (1,) int64, the boundary started from
+    buf : (n + 1,) int64
+    outer, inner : (5,) and (4,) int64, where a stopped pass resumes
+    """
+
+    keep: BoolArray
+    has: BoolArray
+    k: IntArray
+    buf: IntArray
+    outer: IntArray
+    inner: IntArray
+
+
+def new_work(inst: Instance, n: int) -> ResumeWork:
+    """The work space of :func:`resume_chrono` for lists of ``n`` tasks.
+
+    Parameters
+    ----------
+    inst : Instance
+    n : int
+
+    Returns
+    -------
+    ResumeWork
+    """
+    i64 = np.int64
+    return ResumeWork(
+        np.zeros(inst.n_tasks, dtype=np.bool_),
+        np.zeros(inst.n_arms, dtype=np.bool_),
+        np.zeros(1, dtype=i64),
+        np.empty(n + 1, dtype=i64),
+        np.zeros(5, dtype=i64),
+        np.zeros(4, dtype=i64),
+    )
+
+
+def resume_chrono(
+    inst: Instance,
+    ctx: Ctx,
+    root: State,
+    anchor: tuple[State, IntArray, IntArray] | None,
+    order: IntArray,
+    fixed: IntArray,
+    src: Snaps,
+    out: Snaps,
+    every: int,
+    state: State,
+    work: ResumeWork,
+) -> tuple[int, int]:
+    """Chronological chunked decoding of ``order`` that resumes from the
+    anchor's complete state: the boundary before the first position where
+    ``order`` or its modes differ from the anchor's, restored as
+    :func:`restore` restores it, then :func:`decode_resume` from there (the
+    same schedule as that pair of calls, in one compiled call).
+
+    Parameters
+    ----------
+    inst : Instance
+    ctx : Ctx
+        Chronological (:meth:`Instance.ctx`).
+    root : State
+        The state every list is decoded from.
+    anchor : (State, order, modes) or None
+        The anchor's complete state, list and modes (None: decode from ``root``).
+    order : (n,) int
+    fixed : (T,) int
+        The mode of each task (-1: chosen).
+    src : Snaps
+        The anchor's flags (:func:`new_flags`): which boundaries carried no task.
+    out : Snaps
+        Receives the flags of the boundaries after the one started from.
+    every : int
+    state : State
+        Overwritten with the result (what it held before does not matter).
+    work : ResumeWork
+        Of this list length (:func:`new_work`).
+
+    Returns
+    -------
+    code : int
+        0 on success, -1 when some task could not be placed.
+    k_from : int
+        The boundary started from (-1: ``root``).
+    """
+    work.outer[:] = 0
+    work.inner[:] = 0
+    if anchor is None:
+        work.k[0] = 0
+        fin, ao, am = root, order, fixed
+    else:
+        work.k[0] = 1
+        fin, ao, am = anchor
+    while True:
+        code = int(
+            _resume_chrono(
+                inst.data,
+                state,
+                ctx,
+                inst.scratch,
+                inst.oracle,
+                root,
+                fin,
+                ao,
+                am,
+                order,
+                fixed,
+                int(every),
+                src,
+                out,
+                work,
+                work.buf,
+                work.outer,
+                work.inner,
+            )
+        )
+        if code != RESUME:
+            return code, int(work.k[0])
+        inst.answer_misses()
+
+
 def restore(
     inst: Instance, root: State, final: State, order: IntArray, upto: int, state: State
 ) -> State:
@@ -329,7 +530,8 @@ def restore(
     upto : int
         Positions kept.
     state : State
-        Overwritten with the result (every field an array of ``root``'s shape).
+        Overwritten with the result (every field an array of ``root``'s
+        shape; what it held before does not matter).
 
     Returns
     -------
@@ -338,7 +540,7 @@ def restore(
     """
     keep = root.t_mode >= 0
     keep[np.asarray(order[:upto], dtype=np.int64)] = True
-    _restore(inst.data, root, final, keep, state)
+    _restore(inst.data, root, final, keep, state, np.zeros(inst.n_arms, dtype=np.bool_))
     return state
 
 
@@ -370,6 +572,7 @@ def decode_resume(
     allowed: Any = None,
     arm_lb: FloatArray | None = None,
     states: bool = True,
+    ctx: Ctx | None = None,
 ) -> tuple[int, State]:
     """Decode ``order`` in chunks, resuming from snapshot ``k_from`` of ``src``.
 
@@ -400,6 +603,10 @@ def decode_resume(
         ``src`` and ``out`` hold only the flags (:func:`new_flags`), and when
         ``k_from >= 0`` ``state`` already holds boundary ``k_from``
         (:func:`restore`, chronological decoding only).
+    ctx : Ctx or None
+        The options bundled once (:meth:`Instance.ctx`) for a caller that
+        decodes many lists with the same ones; then ``chrono``, ``waits``,
+        ``blocking``, ``release``, ``allowed`` and ``arm_lb`` are not read.
 
     Returns
     -------
@@ -415,17 +622,19 @@ def decode_resume(
     if not states and k_from >= 0 and state is None:
         raise UsageError("decode_resume: without saved states, pass the restored state")
     st = inst.new_state() if state is None else state
-    has = inst.problem.blocking is not None
-    if blocking and not has:
-        raise UsageError(f"problem {inst.problem.name!r} has no blocking oracle")
-    cx = inst.ctx(
-        chrono=chrono,
-        waits=waits,
-        blocking=has if blocking is None else bool(blocking),
-        release=release,
-        allowed=allowed,
-        arm_lb=arm_lb,
-    )
+    cx = ctx
+    if cx is None:
+        has = inst.problem.blocking is not None
+        if blocking and not has:
+            raise UsageError(f"problem {inst.problem.name!r} has no blocking oracle")
+        cx = inst.ctx(
+            chrono=chrono,
+            waits=waits,
+            blocking=has if blocking is None else bool(blocking),
+            release=release,
+            allowed=allowed,
+            arm_lb=arm_lb,
+        )
     order = np.ascontiguousarray(order, dtype=np.int64)
     fx = np.ascontiguousarray(fixed, dtype=np.int64)
     buf = np.empty(len(order) + 1, dtype=np.int64)

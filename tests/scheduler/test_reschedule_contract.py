@@ -221,3 +221,25 @@ def test_the_collector_is_held_off_during_the_call_and_restored_after() -> None:
     finally:
         gc.callbacks.remove(count)
         gc.enable()
+
+
+def test_a_call_gives_the_same_plan_whatever_ran_before_on_the_problem() -> None:
+    # calls on one problem share its compiled instance (scratch buffers, the
+    # oracle's answers): a plan returned is left alone by the next calls, and
+    # a call gives the same plan after another one as before it
+    for seed, blocking in ((3, True), (4, False)):
+        s = _situation(seed, blocking)
+        p, kw = s["p"], s["kw"]
+        first = reschedule(p, seed=1, evaluations=12, **kw)
+        assert first.schedule is not None
+        kept = (first.schedule.start.copy(), first.schedule.mode.copy(), first.schedule.end.copy())
+        other = reschedule(p, now=0.0, previous=kw["previous"], seed=2, evaluations=12)
+        assert other.schedule is not None
+        again = reschedule(p, seed=1, evaluations=12, **kw)
+        assert again.schedule is not None
+        now = (first.schedule.start, first.schedule.mode, first.schedule.end)
+        for a, b in zip(kept, now, strict=True):
+            assert np.array_equal(a, b)
+        assert np.array_equal(again.schedule.start, first.schedule.start)
+        assert np.array_equal(again.schedule.mode, first.schedule.mode)
+        validate(p, again.schedule)

@@ -11,7 +11,15 @@ from hypothesis import strategies as st_
 from scheduler import validate
 from scheduler.generate import random_problem
 from scheduler.kernel import compile_problem, decode, to_schedule
-from scheduler.kernel.resume import chunk_size, decode_resume, new_flags, new_snaps, restore
+from scheduler.kernel.resume import (
+    chunk_size,
+    decode_resume,
+    new_flags,
+    new_snaps,
+    new_work,
+    restore,
+    resume_chrono,
+)
 from scheduler.search import Evaluator, local_search
 
 
@@ -186,6 +194,50 @@ def test_a_restored_boundary_is_the_saved_snapshot(
             states=False,
         )
         assert code_k == 0 and _used_equal(inst, st_k, fin), k
+    # the same in one compiled call (resume_chrono), decoded into a state that
+    # holds another schedule: from the root, from the anchor with the same
+    # list, and from the anchor with one task in another mode
+    cx = inst.ctx(chrono=True, blocking=True)
+    work = new_work(inst, len(rest))
+    fixed = fin.t_mode.copy()
+    changed = fixed.copy()
+    q = int(rest[int(rng.integers(len(rest)))])
+    changed[q] = next((m for m in p.task_modes[q] if m != fixed[q]), fixed[q])
+    for anchor, modes in (
+        (None, fixed),
+        ((fin, rest, fixed), fixed),
+        ((fin, rest, fixed), changed),
+    ):
+        want_code, want = decode_resume(
+            inst,
+            rest,
+            modes,
+            new_flags(inst, len(rest), every),
+            new_flags(inst, len(rest), every),
+            -1,
+            every=every,
+            state=base.copy(),
+            chrono=True,
+            states=False,
+        )
+        into = fin.copy()
+        into.tl_s[:] = 7.0  # what it held before must not matter
+        got_code, _k = resume_chrono(
+            inst,
+            cx,
+            base,
+            anchor,
+            rest,
+            modes,
+            flags,
+            new_flags(inst, len(rest), every),
+            every,
+            into,
+            work,
+        )
+        assert got_code == want_code
+        if want_code == 0:
+            assert _used_equal(inst, into, want)
 
 
 @pytest.mark.parametrize("seed", range(4))
