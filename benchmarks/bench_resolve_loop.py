@@ -45,25 +45,19 @@ revision's kernel is compiled once in a temporary copy, a few minutes).
 from __future__ import annotations
 
 import hashlib
-import io
-import json
 import os
 import pickle
-import subprocess
 import sys
-import tarfile
-import tempfile
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 import workcell.sim.coordination.recovery as recovery
 from benchmarks.bench_sim import _scenarios
-from benchmarks.common import table_main
+from benchmarks.common import RevisionProcess, table_main
 from multiarm.errors import MultiarmError
 from scheduler import solve
 from scheduler.reschedule import FrozenTask, Rescheduled, reschedule
@@ -210,57 +204,6 @@ for line in sys.stdin:
 """The baseline's process: the same plan, scenarios and calls, one command per line."""
 
 
-class _Baseline:
-    """Another revision's code in a second process (:data:`_CHILD`), fed
-    one simulation or one call at a time."""
-
-    def __init__(self, rev: str, job: dict[str, Any]) -> None:
-        self.dir = tempfile.TemporaryDirectory(prefix="multiarm-baseline-")
-        root = Path(self.dir.name)
-        repo = Path(__file__).resolve().parent.parent
-        tar = subprocess.run(
-            ["git", "archive", "--format=tar", rev], cwd=repo, capture_output=True, check=True
-        ).stdout
-        with tarfile.open(fileobj=io.BytesIO(tar)) as tf:
-            tf.extractall(root, filter="data")
-        self.rev = subprocess.run(
-            ["git", "rev-parse", "--short", rev], cwd=repo, capture_output=True, text=True
-        ).stdout.strip()
-        with open(root / "job.pkl", "wb") as fh:
-            pickle.dump(job, fh)
-        env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-        self.proc = subprocess.Popen(
-            [sys.executable, "-c", _CHILD, str(root), str(root / "job.pkl")],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-            cwd=root,
-            env=env,
-        )
-        if self._line() != "ready":
-            raise MultiarmError(f"the baseline {rev!r} did not start")
-
-    def _line(self) -> str:
-        assert self.proc.stdout is not None
-        return self.proc.stdout.readline().strip()
-
-    def ask(self, cmd: str, i: int) -> dict[str, Any]:
-        assert self.proc.stdin is not None
-        self.proc.stdin.write(f"{cmd} {i}\n")
-        self.proc.stdin.flush()
-        line = self._line()
-        if not line:
-            raise MultiarmError("the baseline process stopped")
-        out: dict[str, Any] = json.loads(line)
-        return out
-
-    def close(self) -> None:
-        if self.proc.stdin is not None:
-            self.proc.stdin.close()
-        self.proc.wait(timeout=60)
-        self.dir.cleanup()
-
-
 def measure(
     seed: int, cell: str, scenarios: int, time_limit: float, repeat: int, baseline: str = ""
 ) -> dict[str, Any]:
@@ -301,24 +244,29 @@ def measure(
             }
         )
     base: dict[str, Any] = {}
-    child: _Baseline | None = None
+    child: RevisionProcess | None = None
     if baseline:
         print(f"bench_resolve_loop: starting the baseline {baseline}", file=sys.stderr, flush=True)
-        child = _Baseline(
+        child = RevisionProcess(
             baseline,
-            {
-                "cell": cell,
-                "seed": seed,
-                "plan": _plain(plan),
-                "faults": [f.to_dicts() for _label, f in scen],
-                "calls": [{k: _plain(v) for k, v in kw.items() if k != "problem"} for kw in calls],
-            },
+            _CHILD,
+            pickle.dumps(
+                {
+                    "cell": cell,
+                    "seed": seed,
+                    "plan": _plain(plan),
+                    "faults": [f.to_dicts() for _label, f in scen],
+                    "calls": [
+                        {k: _plain(v) for k, v in kw.items() if k != "problem"} for kw in calls
+                    ],
+                }
+            ),
         )
         base = {"revision": child.rev, "scenarios": [], "loop_ms": [], "replay": []}
         # the scenarios again, alternating: the baseline's, then this revision's
         for i, (label, faults) in enumerate(scen):
             print(f"bench_resolve_loop: side by side: {label}", file=sys.stderr, flush=True)
-            got = child.ask("sim", i)
+            got = child.ask(f"sim {i}")
             base["scenarios"].append({"fault": label, **got})
             base["loop_ms"] += got["latency_ms"]
             res = simulate(cc, plan, seed=seed, faults=faults, options=SimOptions(monitor=False))
@@ -332,11 +280,11 @@ def measure(
         for rep in range(repeat):
             order = names if (i + rep) % 2 == 0 else names[::-1]  # alternate which runs first
             if child is not None and rep % 2 == 0:
-                base["replay"].append({"call": i, **child.ask("call", i)})
+                base["replay"].append({"call": i, **child.ask(f"call {i}")})
             for mode in order:
                 replay[mode].append({"call": i, **_one({**kw, **MODES[mode]})})
             if child is not None and rep % 2 == 1:
-                base["replay"].append({"call": i, **child.ask("call", i)})
+                base["replay"].append({"call": i, **child.ask(f"call {i}")})
     if child is not None:
         child.close()
     return {
