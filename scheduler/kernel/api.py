@@ -504,6 +504,15 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         st2 = inst.new_state()
         S, end, k, w = inst.query(st2, 0, 0, inst.earliest(st2, 0, False))
         inst.commit(st2, 0, 0, S, end, k, w)
+        # a re-solve's frozen prefix, committed in one call
+        inst.commit_all(
+            inst.new_state(),
+            np.zeros(1, dtype=np.int64),
+            np.zeros(1, dtype=np.int64),
+            np.array([S]),
+            np.array([end]),
+            np.zeros((1, max(inst.max_borders, 1))),
+        )
         if p.blocking is not None:
             expand_blocking(inst, st2, np.array([1]), np.array([2]))
             place_blocking(inst, st2, 1, 2, end)

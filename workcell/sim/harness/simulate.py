@@ -32,6 +32,7 @@ import numpy as np
 
 from multiarm.errors import InternalError, UsageError
 from scheduler import Problem, Schedule, validate
+from scheduler.kernel import warm_up
 from workcell.cell import Cell
 from workcell.compile import CompiledCell, compile_cell
 from workcell.sim.comms.link import Link
@@ -236,6 +237,10 @@ def simulate(
         else {}
     )
 
+    if resolve and coordination == "centralized" and len(fplan):
+        # a fault may make the coordinator re-solve: the scheduler's compiled
+        # code loaded now, so the first re-solve's latency is its own
+        warm_up()
     kernel = EventLoop()
     trace = Trace()
     A = p.n_arms
