@@ -62,6 +62,7 @@ from multiarm.errors import MultiarmError
 from scheduler import solve
 from scheduler.reschedule import FrozenTask, Rescheduled, reschedule
 from scheduler.schedule import Schedule
+from scheduler.tree import TreeOptions
 from workcell import compile_cell, load_example
 from workcell.sim.harness.options import SimOptions
 from workcell.sim.harness.simulate import simulate
@@ -205,18 +206,24 @@ for line in sys.stdin:
 
 
 def measure(
-    seed: int, cell: str, scenarios: int, time_limit: float, repeat: int, baseline: str = ""
+    seed: int, cell: str, scenarios: int, evaluations: int, repeat: int, baseline: str = ""
 ) -> dict[str, Any]:
-    """The whole table: the scenarios simulated with re-solving on, then every
+    """The whole table: on the tree search's plan after ``evaluations``
+    decodes (work-limited: the same plan, scenarios and calls on every
+    machine), the scenarios simulated with re-solving on, then every
     recorded call replayed ``repeat`` times in each variant (:data:`MODES`);
     with a ``baseline`` revision, its process simulates each scenario and
     replays each call alternately with this one."""
     load = os.getloadavg()[0]
     cc = compile_cell(load_example(cell))
     p = cc.problem
-    r = solve(p, "tree", time_limit=time_limit, seed=seed)
+    r = solve(
+        p, "tree", time_limit=None, seed=seed, options=TreeOptions(max_evaluations=evaluations)
+    )
     if r.schedule is None:
-        raise MultiarmError(f"cell {cell!r}: the tree search found no plan in {time_limit:g} s")
+        raise MultiarmError(
+            f"cell {cell!r}: the tree search found no plan in {evaluations} decodes"
+        )
     plan = r.schedule
     simulate(cc, plan, seed=0, options=SimOptions(monitor=False))  # warm caches and compiled code
     scen = _scenarios(cc, plan, scenarios, seed)
@@ -293,6 +300,7 @@ def measure(
         "n_arms": p.n_arms,
         "n_tasks": p.n_tasks,
         "planned_makespan": float(plan.makespan),
+        "evaluations": evaluations,
         "scenarios": runs,
         "calls": len(calls),
         "remaining": [p.n_tasks - len(kw["done"]) - len(kw["running"]) for kw in calls],
@@ -332,7 +340,8 @@ def table(r: Any) -> str:
     lines = [
         f"# Re-solving in the loop: {r['cell']} ({r['n_arms']} arms, {r['n_tasks']} tasks)",
         "",
-        f"Plan: tree search, seed {r['seed']}, makespan {r['planned_makespan']:.1f} s. "
+        f"Plan: tree search, seed {r['seed']}, {r['evaluations']} decodes, "
+        f"makespan {r['planned_makespan']:.1f} s. "
         f"{len(r['scenarios'])} seeded fault scenarios simulated with re-solving on: "
         f"{r['calls']} re-solves, "
         + (
