@@ -344,7 +344,7 @@ def references(
                 "lower_bound (s)": round(lb, 2),
                 "zone-free bound (s)": round(ref.zone_free_bound, 2),
                 "overlap bound (s)": round(ref.overlap_bound, 2) if ref.overlap_bound > 0 else "-",
-                "busy-resources bound (s)": round(busy, 2),
+                "busy-resources bound (s)": round(busy, 2) if busy > 0 else "-",
                 "exact status": "not applicable"
                 if ex is None
                 else ("proven" if ex.proven else f"stopped ({ex.reason})"),
@@ -432,7 +432,8 @@ def main(argv: list[str] | None = None) -> None:
         " where the proven? column says yes: see"
         " docs/scheduler.md for what each bound keeps of the problem. An overlap bound '-'"
         " means none: skipped (more than 20,000 pairs of modes sharing a resource) or no"
-        " solution of the relaxation within its limit. ref dtime is CP-SAT's"
+        " solution of the relaxation within its limit; a busy-resources bound '-' means"
+        " that relaxation proved nothing above 0 within its limit. ref dtime is CP-SAT's"
         " deterministic time of the no-wait solve (repeatable, unlike the wall time)."
         " bound source: which bound is the best (lower_bound: no solver; zone-free,"
         " overlap, busy resources: the CP-SAT relaxations; cpsat: the general model, at an exact unit"
