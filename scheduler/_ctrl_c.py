@@ -20,7 +20,12 @@ lost a Ctrl-C during a tree search that races CP-SAT (about 1 instant in
   released, and the ``with`` around it raised ``RuntimeError: release
   unlocked lock`` instead: the solve crashed. Raised inside numba's compiler, it can leave the
   compiler broken for the rest of the process (the kernel warm-up is
-  therefore a :func:`deferred` block).
+  therefore a :func:`deferred` block). Raised inside the Python that
+  compiled code calls back (numba unpickles its constants for each call
+  that takes a ``numpy.random.Generator``), it made the call end in
+  ``SystemError: ... returned a result with an exception set`` or the
+  process in a segmentation fault (``multiarm simulate`` interrupted during
+  the local search's moves): such calls are :func:`atomic`.
 
 While a solve runs, :func:`guard` replaces Python's handler (only when it
 is Python's own, on the main thread) with one that first *notes* the
@@ -40,7 +45,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
 
-__all__ = ["CtrlC", "StopEvent", "current", "deferred", "guard"]
+__all__ = ["CtrlC", "StopEvent", "atomic", "current", "deferred", "guard"]
 
 
 class CtrlC:
@@ -123,6 +128,35 @@ def deferred(reraise: bool = True) -> Iterator[None]:
             c._pending = False
             if reraise:
                 raise KeyboardInterrupt
+
+
+@contextmanager
+def atomic() -> Iterator[None]:
+    """A compiled call that calls back into Python, which a Ctrl-C must not
+    enter: a SIGINT during it raises KeyboardInterrupt at its end.
+
+    Inside a solve (:func:`guard`) it is a :func:`deferred` block; outside one,
+    on the main thread under Python's own handler, a handler that only notes
+    the SIGINT is in place for the block; elsewhere nothing changes.
+    """
+    if current().active:
+        with deferred():
+            yield
+        return
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGINT) is not signal.default_int_handler
+    ):
+        yield
+        return
+    hit: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, _frame: hit.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if hit:
+        raise KeyboardInterrupt
 
 
 class StopEvent(threading.Event):

@@ -39,6 +39,7 @@ from __future__ import annotations
 import numpy as np
 
 from multiarm.types import BoolArray, FloatArray, IntArray
+from scheduler import _ctrl_c
 from scheduler.kernel._jit import njit
 from scheduler.kernel.arrays import Instance, State
 from scheduler.kernel.critical import (
@@ -337,19 +338,20 @@ def chrono_extend(
     rel = d.release if release is None else np.ascontiguousarray(release, dtype=np.float64)
     c_t, c_kind, c_by = (np.ascontiguousarray(x, dtype=np.int64) for x in chain)
     links = len(st.t_start) if max_links is None else int(max_links)
-    out: tuple[IntArray, IntArray, IntArray] = _extend(
-        d,
-        st,
-        np.ascontiguousarray(order, dtype=np.int64),
-        np.ascontiguousarray(pos, dtype=np.int64),
-        rel,
-        c_t,
-        c_kind,
-        c_by,
-        rng,
-        links,
-        float(tol),
-    )
+    with _ctrl_c.atomic():  # see neighbour_moves
+        out: tuple[IntArray, IntArray, IntArray] = _extend(
+            d,
+            st,
+            np.ascontiguousarray(order, dtype=np.int64),
+            np.ascontiguousarray(pos, dtype=np.int64),
+            rel,
+            c_t,
+            c_kind,
+            c_by,
+            rng,
+            links,
+            float(tol),
+        )
     return out
 
 
@@ -398,16 +400,19 @@ def neighbour_moves(
     d = inst.data
     T = len(st.t_start)
     fr = np.zeros(T, dtype=np.bool_) if frozen is None else frozen
-    out: tuple[IntArray, IntArray, IntArray] = _neighbour_moves(
-        d,
-        st,
-        np.ascontiguousarray(order, dtype=np.int64),
-        np.ascontiguousarray(modes, dtype=np.int64),
-        fr,
-        d.all_modes if allowed is None else allowed,
-        d.release if release is None else release,
-        bool(chrono),
-        rng,
-        float(tol),
-    )
+    # the call unpickles constants in Python for its Generator: a Ctrl-C
+    # must not be raised in there (scheduler._ctrl_c.atomic)
+    with _ctrl_c.atomic():
+        out: tuple[IntArray, IntArray, IntArray] = _neighbour_moves(
+            d,
+            st,
+            np.ascontiguousarray(order, dtype=np.int64),
+            np.ascontiguousarray(modes, dtype=np.int64),
+            fr,
+            d.all_modes if allowed is None else allowed,
+            d.release if release is None else release,
+            bool(chrono),
+            rng,
+            float(tol),
+        )
     return out
