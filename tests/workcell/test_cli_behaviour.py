@@ -182,7 +182,8 @@ def test_ctrl_c_ends_cleanly_with_status_130(tmp_path: Path) -> None:
         stderr=subprocess.PIPE,
         text=True,
         # faulthandler: a crash prints where it happened (one run of the suite
-        # saw this process end by SIGSEGV after the SIGINT; not reproduced since)
+        # saw this process end by SIGSEGV after the SIGINT: a KeyboardInterrupt
+        # inside a compiled call's callback, tests/scheduler/test_ctrl_c_compiled.py)
         env={**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONFAULTHANDLER": "1"},
     )
     assert proc.stderr is not None
