@@ -23,7 +23,7 @@ from scheduler import (
     solve,
     validate,
 )
-from scheduler.generate import random_problem
+from scheduler.generate import generate_problem, random_problem
 from scheduler.tree import TreeOptions
 
 FAST = {
@@ -300,6 +300,13 @@ def test_parallel_workers_return_a_valid_schedule() -> None:
     )
     assert r.schedule is not None and validate(p, r.schedule) == r.objective
     assert "worker_error" not in r.stats.extra
+    # the second process searches the other neighbourhood (list local search)
+    assert r.stats.extra["worker_searches"] == ("local_search",)
+    fjsp = generate_problem("setup_fjsp", 4, 30, 0, 0, seed=2)
+    opt = TreeOptions(workers=3, parallel_min_time=0.5, portfolio_fjsp_max_tasks=0)
+    r = solve(fjsp, "tree", time_limit=1.5, seed=3, options=opt)
+    # on a pure FJSP every worker runs the compiled graph tabu search
+    assert r.stats.extra["worker_searches"] == ("tabu_search", "tabu_search")
     single = solve(
         p, "tree", time_limit=None, seed=3, options=TreeOptions(workers=2, max_evaluations=200)
     )
