@@ -627,6 +627,9 @@ def _solve_tree(
         # a pure FJSP: the compiled graph tabu search keeps all the time left after
         # the first beam pass, in one run (its restarts and settings go on undisturbed)
         graph = pure_fjsp(ev)
+        # racing CP-SAT, no second process carries the list local search
+        # (_member_search): the main process alternates it with the tabu search
+        alternate = race is not None and not graph and not ev.blocking
 
         def out_of_time() -> bool:
             return (
@@ -697,20 +700,26 @@ def _solve_tree(
                         if rounds >= 3:
                             break  # list decoding dead-locks here: the exact fallback takes over
                         continue
-                # improvement: tabu search on arm sequences (list local search with a blocking oracle)
+                # improvement: tabu search on arm sequences (list local search with a
+                # blocking oracle); beside a race, the two take turns by slice
                 ph = time.perf_counter()
                 slice_end = deadline
-                if math.isfinite(deadline) and width <= opt.max_width and not graph:
+                if math.isfinite(deadline) and (width <= opt.max_width or alternate) and not graph:
                     slice_end = ph + (deadline - ph) * opt.improve_share
                 evals = None
                 if work_limit is not None:
                     evals = min(opt.local_evaluations, max(1, work_limit - ev.evaluations))
                 elif not math.isfinite(deadline):
                     evals = opt.local_evaluations
-                if ev.blocking or best.state is None:
+                listed = alternate and rounds % 2 == 0
+                if ev.blocking or best.state is None or listed:
                     improved = local_search(
                         ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals
                     )
+                    if listed:
+                        stats.phases["improve_list"] = (
+                            stats.phases.get("improve_list", 0.0) + time.perf_counter() - ph
+                        )
                 else:
                     improved = tabu_search(
                         ev, best, slice_end, rng, on_improve=offer, lower=lb, max_evaluations=evals

@@ -151,15 +151,22 @@ def test_tree_returns_the_optimum_the_racing_cpsat_proves(
 
 
 def test_race_rule_follows_the_options() -> None:
-    """The window rule keeps the race off (a second tree process instead); the size rule
-    reaches 40 tasks by default without setups, 16 with them; a work-limited run never
-    races."""
+    """The window rule keeps the race off (a second tree process instead, searching the
+    other neighbourhood); beside the race the main process alternates the two; the size
+    rule reaches 40 tasks by default without setups, 16 with them; a work-limited run
+    never races."""
     p = generate_problem("routes", 3, 30, 3, 1, seed=1)
     assert p.n_windows > 5
-    off = solve_tree(p, 1.0, 0, options=TreeOptions(portfolio_max_windows=5))
+    off = solve_tree(p, 1.0, 0, options=TreeOptions(portfolio_max_windows=5, parallel_min_time=0.3))
     assert "portfolio" not in off.stats.extra
+    # no race: the second process runs the list local search, the main one never does
+    assert off.stats.extra["worker_searches"] == ("local_search",)
+    assert "improve_list" not in off.stats.phases
     on = solve_tree(p, 1.0, 0)
     assert "portfolio" in on.stats.extra
+    # racing, no second process: the main one takes turns with the list local search
+    assert "worker_searches" not in on.stats.extra
+    assert on.stats.phases["improve_list"] > 0
     small = solve_tree(p, 1.0, 0, options=TreeOptions(portfolio_max_tasks=29))
     assert "portfolio" not in small.stats.extra
     worked = solve_tree(p, None, 0, options=TreeOptions(max_evaluations=300))
