@@ -93,8 +93,9 @@ class TreeOptions:
     ``100 * max_evaluations`` with a work limit)."""
     workers: int = field(default_factory=lambda: min(2, os.cpu_count() or 1))
     """Processes searching at once (like CP-SAT's workers): the others run
-    independent improvement from other seeds in forked processes, and the
-    best schedule wins. Used only with a wall-clock limit of at least
+    independent improvement from other seeds in forked processes (the first
+    of them, on a zone problem, with the list local search, the neighbourhood
+    the main process does not use there), and the best schedule wins. Used only with a wall-clock limit of at least
     ``parallel_min_time``, where ``fork`` exists (Linux) and the caller is
     not a daemon process (a daemon, e.g. a Dask worker, searches alone and
     says so in ``stats.extra["workers"]``); work-limited runs
