@@ -9,7 +9,8 @@ Variables and constraints (times scaled to integers, see below):
   are allowed; waits at borders nothing refers to are never needed), and
   ``E_t = P_m,last + d_m`` if ``x_m``;
 * arms: the optional mode intervals ``[S_t, E_t)`` of an arm never overlap
-  (``NoOverlap``), and with setup times a ``Circuit`` over the arm's
+  (``NoOverlap``; a mode without delay points is a fixed-size interval
+  ``[S_t, S_t + d_m)``, which CP-SAT propagates better than a size variable), and with setup times a ``Circuit`` over the arm's
   modes whose arcs enforce ``S_t' >= E_t + setup(t, t')`` (and the setup from
   the initial pose after the depot);
 * exclusive zones: ``NoOverlap`` over the occupancy intervals
@@ -334,13 +335,22 @@ def build_model(
                 prev = v
             P[m] = pts
             d = float(sh.duration) + (float(pad[m]) if pad is not None else 0.0)
-            mdl.add(E[t] == prev + hi(d)).only_enforce_if(x)
-            mdl.add(size_t == E[t] - S[t]).only_enforce_if(x)
             a = int(p.mode_arm[m])
             # the initial pose's setup binds only the arm's first task (on the
             # circuit's start arc); every task keeps its arm's shortest way in
             mdl.add(S[t] >= hi(float(arrive[m]))).only_enforce_if(x)
-            mode_iv[m] = mdl.new_optional_interval_var(S[t], size_t, E[t], x, f"I{m}")
+            if len(refs) == 1:
+                # no delay point: the mode lasts exactly its duration, and a
+                # fixed-size interval propagates best (on FJSP, MK10 at 10 s:
+                # 233.7 with the size as E - S, 223.3 fixed; seeds 0, 3, 4)
+                dd = hi(d)
+                mdl.add(E[t] == S[t] + dd).only_enforce_if(x)
+                mdl.add(size_t == dd).only_enforce_if(x)
+                mode_iv[m] = mdl.new_optional_fixed_size_interval_var(S[t], dd, x, f"I{m}")
+            else:
+                mdl.add(E[t] == prev + hi(d)).only_enforce_if(x)
+                mdl.add(size_t == E[t] - S[t]).only_enforce_if(x)
+                mode_iv[m] = mdl.new_optional_interval_var(S[t], size_t, E[t], x, f"I{m}")
             for r, i, s, k, e in pieces:
                 fixed = hi(e) - lo(s)
                 if relax and fixed <= 0:  # rounds to nothing: dropped (a relaxation)
