@@ -8,6 +8,7 @@ from benchmarks import (
     bench_bounds,
     bench_cells,
     bench_fjsp,
+    bench_fjsp_seeds,
     bench_generated,
     bench_geometry,
     bench_grid,
@@ -56,6 +57,7 @@ def main() -> None:
         bench_outside,
         bench_small,
         bench_fjsp,
+        bench_fjsp_seeds,
         bench_sweep,
     ):
         print(f"== {mod.__name__}", flush=True)

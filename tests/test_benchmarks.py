@@ -19,6 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_zones",
         "bench_kernel",
         "bench_fjsp",
+        "bench_fjsp_seeds",
         "bench_generated",
         "bench_setups",
         "bench_lines",

@@ -150,3 +150,27 @@ def test_generated_table_targets_optimum_or_bound() -> None:
     assert "on the 1 problems CP-SAT solved to optimality: mean gap of tree 0.00%" in table
     assert "tree -10.00% against it on average" in table
     assert np.isfinite(df["makespan"]).sum() == 7
+
+
+def test_seed_spread_table_reports_every_seed_and_the_spread_of_the_mean_gap() -> None:
+    # tree: seed 0 at the best known on both, seed 1 10 % over on m1; cpsat 20 % over on m2
+    data = [
+        ("m1", "tree", 0, 10.0), ("m1", "tree", 1, 11.0), ("m2", "tree", 0, 20.0),
+        ("m2", "tree", 1, 20.0), ("m1", "cpsat", 0, 10.0), ("m1", "cpsat", 1, 10.0),
+        ("m2", "cpsat", 0, 24.0), ("m2", "cpsat", 1, 24.0),
+    ]  # fmt: skip
+    bks = {"m1": 10.0, "m2": 20.0}
+    cols = ("instance", "label", "seed", "makespan")
+    df = pd.DataFrame([dict(zip(cols, r, strict=True)) for r in data])
+    df["family"], df["time_limit"] = "b", 10.0
+    df["best_known"] = df["instance"].map(bks)
+    t = A.seed_spread_table(df)
+    assert "| m1 | 10 | 10 11 | 10.5 (10-11) | 10 10 | 10.0 (10-10) |" in t
+    assert "| 0 | 0.00% | 10.00% |" in t and "| 1 | 5.00% | 10.00% |" in t
+    assert "- **tree**: mean gap 2.50% over the seeds (from 0.00% to 5.00%)" in t
+    assert "the best seed of each instance: 0.00%; every seed at the best known on 1 of 2" in t
+    assert "- **cpsat**: mean gap 10.00%" in t and "on 1 of 2 instances" in t
+    # only the solvers that ran are columns; none at all is an error that names the table
+    assert "cpsat" not in A.seed_spread_table(df[df["label"] == "tree"])
+    with pytest.raises(UsageError, match=r"seed_spread_table: no runs of the solvers \['greedy'\]"):
+        A.seed_spread_table(df[df["label"] == "tree"], solvers=("greedy",))

@@ -21,8 +21,8 @@ numbers behind it as a DataFrame.
 * :func:`scaling`: a measure (runtime, gap, makespan, ...) against problem
   size (tasks, arms or zones): median and inter-quartile band per solver.
 * :func:`box_per_solver`: the distribution of a measure per solver.
-* :func:`fjsp_table`, :func:`generated_table`, :func:`small_table`,
-  :func:`cells_table`, :func:`scale_table`: the Markdown tables of
+* :func:`fjsp_table`, :func:`seed_spread_table`, :func:`generated_table`,
+  :func:`small_table`, :func:`cells_table`, :func:`scale_table`: the Markdown tables of
   ``benchmarks/results/`` from the results of the sweep files in
   ``benchmarks/sweeps/``; :func:`sweep_note` says what ran, on what;
   :func:`summary_table` is the short table ``multiarm sweep`` prints at its end.
@@ -57,6 +57,7 @@ from workcell.experiments.analysis.tables import (
     generated_table,
     measurements,
     scale_table,
+    seed_spread_table,
     small_table,
     summary_table,
     sweep_note,
@@ -77,6 +78,7 @@ __all__ = [
     "scale_table",
     "scaling",
     "scaling_data",
+    "seed_spread_table",
     "small_table",
     "summary_table",
     "sweep_note",
