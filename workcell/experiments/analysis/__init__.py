@@ -51,13 +51,13 @@ from workcell.experiments.analysis.plots import (
     time_to_target,
     time_to_target_data,
 )
+from workcell.experiments.analysis.seeds import seed_spread_table
 from workcell.experiments.analysis.tables import (
     cells_table,
     fjsp_table,
     generated_table,
     measurements,
     scale_table,
-    seed_spread_table,
     small_table,
     summary_table,
     sweep_note,
