@@ -10,8 +10,9 @@ Variables and constraints (times scaled to integers, see below):
   ``E_t = P_m,last + d_m`` if ``x_m``;
 * arms: the optional mode intervals ``[S_t, E_t)`` of an arm never overlap
   (``NoOverlap``; a mode without delay points is a fixed-size interval
-  ``[S_t, S_t + d_m)``, which CP-SAT propagates better than a size variable), and with setup times a ``Circuit`` over the arm's
-  modes whose arcs enforce ``S_t' >= E_t + setup(t, t')`` (and the setup from
+  ``[S_t, S_t + d_m)``, which CP-SAT propagates better than a size
+  variable), and with setup times a ``Circuit`` over the arm's modes whose
+  arcs enforce ``S_t' >= E_t + setup(t, t')`` (and the setup from
   the initial pose after the depot);
 * exclusive zones: ``NoOverlap`` over the occupancy intervals
   ``[P_m,i + s, P_m,k + e)`` of every window ``[s, e)`` in the zone, ``i`` the
