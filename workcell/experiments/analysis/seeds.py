@@ -15,16 +15,9 @@ import numpy as np
 
 from multiarm.errors import UsageError
 from workcell.experiments.analysis.gaps import INSTANCE, need_columns
+from workcell.experiments.analysis.tables import _fmt, _pct
 
 __all__ = ["seed_spread_table"]
-
-
-def _fmt(x: float) -> str:
-    return format(x, ".0f") if math.isfinite(x) else "none"
-
-
-def _pct(x: float) -> str:
-    return f"{100 * x:.2f}%" if math.isfinite(x) else "-"
 
 
 def seed_spread_table(df: Any, solvers: Sequence[str] = ("tree", "cpsat")) -> str:
