@@ -130,6 +130,20 @@ class TreeOptions:
     FJSP): the compiled cells carry 1,578-2,329 windows, and there CP-SAT
     finds no schedule in 10 s, so the second core is better spent on a
     second tree process."""
+    polish_share: float = 0.4
+    """Share of a wall-clock budget kept for the polish, at its end: CP-SAT
+    (on ``workers`` threads) hinted with the tree's best schedule, whose
+    schedule replaces the tree's only when it is shorter (0: never). Only
+    where :func:`_polishes` holds: a zone problem that is not a pure FJSP (the
+    graph tabu search is stronger there), without a blocking oracle, with at
+    most ``portfolio_max_windows`` windows and, with setup times, at most
+    ``portfolio_setup_max_tasks`` tasks (CP-SAT's setup circuits take seconds
+    to build); and only with a work limit of none and a polish of at least
+    ``polish_min_time`` seconds. Tuned on the ``routes`` family with seeds
+    2-3 (``benchmarks/sweeps/polish_tune.toml``); the tables use seeds 0-1
+    (docs/scheduler.md, "The polish")."""
+    polish_min_time: float = 2.0
+    """The shortest polish worth building CP-SAT's model for (seconds)."""
     fallback: bool = True
     """When no list order decodes, ask CP-SAT (one worker) within the budget
     left (:mod:`scheduler.fallback`)."""
@@ -161,11 +175,15 @@ class TreeOptions:
             v = getattr(self, name)
             if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
                 raise UsageError(f"TreeOptions.{name} must be an int >= 1 or None, got {v!r}")
+        if not isinstance(self.polish_share, int | float) or not (0.0 <= self.polish_share < 1.0):
+            raise UsageError(
+                f"TreeOptions.polish_share must be in [0, 1), got {self.polish_share!r}"
+            )
         for name in ("beam_share", "improve_share"):
             v = getattr(self, name)
             if not isinstance(v, int | float) or not (0.0 < v <= 1.0):
                 raise UsageError(f"TreeOptions.{name} must be in (0, 1], got {v!r}")
-        for name in ("restart_noise", "parallel_min_time"):
+        for name in ("restart_noise", "parallel_min_time", "polish_min_time"):
             v = getattr(self, name)
             if not isinstance(v, int | float) or not (0.0 <= v < math.inf):
                 raise UsageError(f"TreeOptions.{name} must be finite and >= 0, got {v!r}")
@@ -527,15 +545,29 @@ def _solve_tree(
     opt = options or TreeOptions()
     if problem.n_windows == 0 and problem.n_tools == 0 and problem.blocking is None:
         warm_up_graph()  # before the clock starts, as the kernel's own warm-up
-    if time_limit is not None and opt.max_evaluations is None and _may_race(problem, opt):
+    polish = (
+        time_limit is not None
+        and opt.max_evaluations is None
+        and time_limit * opt.polish_share >= opt.polish_min_time
+        and _may_polish(problem, opt)
+    )
+    if (
+        time_limit is not None
+        and opt.max_evaluations is None
+        and (polish or _may_race(problem, opt))
+    ):
         _load_cpsat()
     st = begin(problem, "tree", seed, waits=waits, record_first=True)
     t0 = st.t0
-    deadline = math.inf if time_limit is None else t0 + time_limit
+    final = math.inf if time_limit is None else t0 + time_limit
     rng = np.random.default_rng(seed)
     stats = st.stats
     p = problem
     ev = st.ev
+    polish = polish and not pure_fjsp(ev)
+    # the tree's own search (and a racing CP-SAT, and the worker processes)
+    # ends here; the polish, if any, has the time from here to ``final``
+    deadline = final - opt.polish_share * time_limit if polish and time_limit else final
     best: Solution | None = st.first  # the HEFT list, recorded as the first incumbent
     race: _Race | None = None
 
@@ -798,11 +830,19 @@ def _solve_tree(
             stats.extra["portfolio_bound"] = race.bound
             if best is not None and best.makespan <= lb + 1e-9:
                 proven = True
+        if (
+            polish
+            and best is not None
+            and not proven
+            and not (stats.interrupted or ctrl_c.hit)
+            and final - time.perf_counter() > 0.1
+        ):
+            best, lb, proven = _polish(p, ev, best, lb, final, waits, seed, opt, stats, t0)
         if best is None and not proven and opt.fallback and not (stats.interrupted or ctrl_c.hit):
             # no list order decodes (start zones dead-locking): ask CP-SAT within the budget left
             from scheduler.fallback import exact_fallback
 
-            left = None if time_limit is None else deadline - time.perf_counter()
+            left = None if time_limit is None else final - time.perf_counter()
             left_evals = None if work_limit is None else max(1, work_limit - stats.evaluations)
             ph = time.perf_counter()
             fb = exact_fallback(
@@ -832,6 +872,47 @@ def _solve_tree(
         stats.interrupted = True
         stats.evaluations = stats.evaluations or ev.evaluations
         return _finish(p, ev, best, lb, t0, seed, stats, proven)
+
+
+def _polish(
+    p: Problem,
+    ev: Evaluator,
+    best: Solution,
+    lb: float,
+    final: float,
+    waits: bool,
+    seed: int,
+    opt: TreeOptions,
+    stats: SearchStats,
+    t0: float,
+) -> tuple[Solution, float, bool]:
+    """The polish (:attr:`TreeOptions.polish_share`): CP-SAT until ``final``,
+    hinted with ``best``'s schedule. Returns the
+    better of the two schedules, the lower bound (CP-SAT's where it is
+    higher) and whether the schedule is proven optimal."""
+    from scheduler.cpsat import solve_cpsat
+
+    ph = time.perf_counter()
+    hint = None
+    if best.state is None:
+        hint = stats.extra.get("worker_schedule") or stats.extra.get("exact_schedule")
+    if hint is None:
+        hint = ev.schedule(best)
+    cp = solve_cpsat(
+        p, max(0.05, final - ph), seed, waits=waits, workers=opt.workers, hint=hint, callback=False
+    )
+    stats.phases["polish"] = time.perf_counter() - ph
+    stats.extra["polish"] = cp.status.value
+    if cp.stats.interrupted:
+        stats.interrupted = True
+    if cp.schedule is not None and cp.objective < best.makespan - 1e-9:
+        stats.extra.pop("worker_schedule", None)  # _finish reads the kept schedule here
+        stats.extra["exact_schedule"] = cp.schedule
+        stats.record(time.perf_counter() - t0, cp.objective)
+        best = _solution_of(cp.schedule, cp.objective)
+    lb = max(lb, cp.bound) if math.isfinite(cp.bound) else lb
+    proven = cp.status is SolveStatus.OPTIMAL and best.makespan <= cp.objective + 1e-9
+    return best, lb, proven or best.makespan <= lb + 1e-9
 
 
 def _prove(
@@ -912,6 +993,16 @@ def _may_race(p: Problem, opt: TreeOptions) -> bool:
     """Whether :func:`_races` can hold for ``p`` whatever kind of problem it is."""
     most = max(opt.portfolio_max_tasks, opt.portfolio_fjsp_max_tasks, opt.portfolio_setup_max_tasks)
     return 0 < p.n_tasks <= most
+
+
+def _may_polish(p: Problem, opt: TreeOptions) -> bool:
+    """Whether the polish (:attr:`TreeOptions.polish_share`) may run on ``p``;
+    a pure FJSP is left out later, once the evaluator knows it is one."""
+    if opt.polish_share <= 0.0 or p.n_tasks == 0 or p.blocking is not None:
+        return False
+    if p.n_windows > opt.portfolio_max_windows:
+        return False
+    return bool(p._setup.zero) or p.n_tasks <= opt.portfolio_setup_max_tasks
 
 
 def _load_cpsat() -> None:

@@ -24,6 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
         "bench_setups",
         "bench_lines",
         "bench_outside",
+        "bench_polish",
         "bench_scale",
         "bench_resolve",
         "bench_resolve_loop",

@@ -15,6 +15,7 @@ the new option is validated.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -230,3 +231,78 @@ def test_cpsat_reports_the_bounds_it_proves_only_on_an_exact_model() -> None:
     rounded: list[float] = []
     solve_cpsat(p, 2.0, 0, workers=1, on_bound=rounded.append, unit=0.3)
     assert rounded == []
+
+
+def test_polish_rule_follows_the_problem_and_the_options() -> None:
+    """The polish (TreeOptions.polish_share) may run on a zone problem without setups, on
+    one with setups only up to portfolio_setup_max_tasks, never beyond
+    portfolio_max_windows, with a blocking oracle or with a share of 0; a pure FJSP is
+    left to the graph tabu search (checked in solve_tree, below)."""
+    from scheduler.tree import _may_polish
+
+    routes = generate_problem("routes", 3, 30, 3, 1, seed=1)
+    stations = generate_problem("stations", 3, 20, 3, 1, seed=1)
+    opt = TreeOptions()
+    assert _may_polish(routes, opt)
+    assert not _may_polish(routes, TreeOptions(polish_share=0.0))
+    assert not _may_polish(routes, TreeOptions(portfolio_max_windows=5))
+    assert not _may_polish(stations, opt)  # setups, 20 tasks > 16
+    assert _may_polish(stations, TreeOptions(portfolio_setup_max_tasks=20))
+
+
+@pytest.mark.parametrize("bad", [-0.1, 1.0, "0.3", None], ids=["negative", "one", "str", "none"])
+def test_polish_share_is_validated(bad: object) -> None:
+    with pytest.raises(UsageError, match="polish_share"):
+        TreeOptions(polish_share=bad)  # type: ignore[arg-type]
+    with pytest.raises(UsageError, match="polish_min_time"):
+        TreeOptions(polish_min_time=-1.0)
+
+
+def test_polish_hands_the_tree_s_schedule_to_cpsat_and_keeps_the_better() -> None:
+    """_polish from the HEFT schedule (the tree's first incumbent) on a small routes
+    problem: CP-SAT, hinted with it, returns a shorter schedule and proves it optimal
+    (the optimum CP-SAT alone proves); the result is a Solution whose schedule _finish
+    validates. From the optimum itself, it keeps the tree's schedule (nothing shorter)."""
+    from scheduler.result import SearchStats
+    from scheduler.start import begin
+    from scheduler.tree import _polish
+
+    p = generate_problem("routes", 3, 10, 3, 1, seed=1)
+    ref = solve_cpsat(p, 20.0, 0, workers=1)
+    assert ref.status.value == "optimal"
+    st = begin(p, "tree", 0)
+    heft = st.first
+    assert heft is not None and heft.makespan > ref.objective
+    stats = SearchStats()
+    t0 = time.perf_counter()
+    best, lb, proven = _polish(p, st.ev, heft, st.lb, t0 + 20.0, True, 0, TreeOptions(), stats, t0)
+    assert (
+        proven
+        and best.makespan == pytest.approx(ref.objective)
+        and lb == pytest.approx(ref.objective)
+    )
+    assert stats.extra["polish"] == "optimal" and stats.phases["polish"] < 20.0
+    assert validate(p, stats.extra["exact_schedule"]) == pytest.approx(ref.objective)
+    # from the optimum (a schedule kept outside the decoder, as a worker's is): kept as it is
+    again = SearchStats()
+    again.extra["worker_schedule"] = kept_schedule = stats.extra["exact_schedule"]
+    kept, _lb, proven = _polish(p, st.ev, best, st.lb, t0 + 40.0, True, 0, TreeOptions(), again, t0)
+    assert kept is best and proven
+    assert again.extra["worker_schedule"] is kept_schedule and "exact_schedule" not in again.extra
+
+
+def test_polish_runs_only_within_its_rule() -> None:
+    """solve_tree polishes a routes problem when the share of its limit reaches
+    polish_min_time (stats: the phase, CP-SAT's status); not with a shorter limit, not
+    on a work limit (those stay repeatable), not on a pure FJSP."""
+    p = generate_problem("routes", 3, 30, 3, 1, seed=1)
+    opt = TreeOptions(polish_share=0.5, polish_min_time=0.5)
+    on = solve_tree(p, 1.2, 0, options=opt)
+    assert on.stats.extra.get("polish") in ("optimal", "feasible") or on.status.value == "optimal"
+    assert "polish" not in solve_tree(p, 1.2, 0).stats.phases  # 0.4 * 1.2 s < 2 s
+    worked = solve_tree(p, None, 0, options=TreeOptions(max_evaluations=300, polish_min_time=0.0))
+    assert "polish" not in worked.stats.phases
+    from scheduler.fjsp import parse_fjsp
+
+    f = parse_fjsp("2 2\n2 1 1 3 1 2 2\n1 2 1 1 2 2\n")
+    assert "polish" not in solve_tree(f, 1.2, 0, options=opt).stats.phases
