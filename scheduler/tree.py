@@ -29,6 +29,11 @@ or, with a blocking oracle, an iterated
 local search on the list (:func:`scheduler.search.local_search`). On small problems (:mod:`scheduler.exact`)
 the search finishes with an exact branch and bound that proves optimality.
 A schedule whose makespan meets the global lower bound is optimal at once.
+
+On zone problems without setup times and with few enough windows, the last
+share of a wall-clock budget (``TreeOptions.polish_share``) goes to the
+*polish*: CP-SAT on both workers, hinted with the tree's best schedule,
+whose schedule is kept only when it is shorter.
 """
 
 from __future__ import annotations
@@ -130,18 +135,18 @@ class TreeOptions:
     FJSP): the compiled cells carry 1,578-2,329 windows, and there CP-SAT
     finds no schedule in 10 s, so the second core is better spent on a
     second tree process."""
-    polish_share: float = 0.4
+    polish_share: float = 0.6
     """Share of a wall-clock budget kept for the polish, at its end: CP-SAT
     (on ``workers`` threads) hinted with the tree's best schedule, whose
     schedule replaces the tree's only when it is shorter (0: never). Only
     where :func:`_polishes` holds: a zone problem that is not a pure FJSP (the
-    graph tabu search is stronger there), without a blocking oracle, with at
-    most ``portfolio_max_windows`` windows and, with setup times, at most
-    ``portfolio_setup_max_tasks`` tasks (CP-SAT's setup circuits take seconds
-    to build); and only with a work limit of none and a polish of at least
-    ``polish_min_time`` seconds. Tuned on the ``routes`` family with seeds
+    graph tabu search is stronger there), without setup times (CP-SAT's setup
+    circuits take seconds to build, and the polish was measured without
+    them), without a blocking oracle and with at most
+    ``portfolio_max_windows`` windows; and only with no work limit and a
+    polish of at least ``polish_min_time`` seconds. Tuned on the ``routes`` family with seeds
     2-3 (``benchmarks/sweeps/polish_tune.toml``); the tables use seeds 0-1
-    (docs/scheduler.md, "The polish")."""
+    (docs/scheduler.md, "Solvers: options", the polish)."""
     polish_min_time: float = 2.0
     """The shortest polish worth building CP-SAT's model for (seconds)."""
     fallback: bool = True
@@ -1000,9 +1005,7 @@ def _may_polish(p: Problem, opt: TreeOptions) -> bool:
     a pure FJSP is left out later, once the evaluator knows it is one."""
     if opt.polish_share <= 0.0 or p.n_tasks == 0 or p.blocking is not None:
         return False
-    if p.n_windows > opt.portfolio_max_windows:
-        return False
-    return bool(p._setup.zero) or p.n_tasks <= opt.portfolio_setup_max_tasks
+    return bool(p._setup.zero) and p.n_windows <= opt.portfolio_max_windows
 
 
 def _load_cpsat() -> None:

@@ -234,10 +234,10 @@ def test_cpsat_reports_the_bounds_it_proves_only_on_an_exact_model() -> None:
 
 
 def test_polish_rule_follows_the_problem_and_the_options() -> None:
-    """The polish (TreeOptions.polish_share) may run on a zone problem without setups, on
-    one with setups only up to portfolio_setup_max_tasks, never beyond
-    portfolio_max_windows, with a blocking oracle or with a share of 0; a pure FJSP is
-    left to the graph tabu search (checked in solve_tree, below)."""
+    """The polish (TreeOptions.polish_share) may run on a zone problem without setups;
+    never on one with setups, beyond portfolio_max_windows, with a blocking oracle or
+    with a share of 0; a pure FJSP is left to the graph tabu search (checked in
+    solve_tree, below)."""
     from scheduler.tree import _may_polish
 
     routes = generate_problem("routes", 3, 30, 3, 1, seed=1)
@@ -246,8 +246,11 @@ def test_polish_rule_follows_the_problem_and_the_options() -> None:
     assert _may_polish(routes, opt)
     assert not _may_polish(routes, TreeOptions(polish_share=0.0))
     assert not _may_polish(routes, TreeOptions(portfolio_max_windows=5))
-    assert not _may_polish(stations, opt)  # setups, 20 tasks > 16
-    assert _may_polish(stations, TreeOptions(portfolio_setup_max_tasks=20))
+    assert not _may_polish(stations, opt)  # travel setups
+    assert not _may_polish(generate_problem("zones", 3, 8, 2, 1, seed=1), opt)  # small, setups
+    assert _may_polish(generate_problem("zones", 3, 8, 2, 1, seed=1, setups=False), opt)
+    blocked = generate_problem("zones", 3, 8, 2, 1, seed=1, setups=False, blocking=True)
+    assert blocked.blocking is not None and not _may_polish(blocked, opt)
 
 
 @pytest.mark.parametrize("bad", [-0.1, 1.0, "0.3", None], ids=["negative", "one", "str", "none"])
