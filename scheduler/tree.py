@@ -138,15 +138,19 @@ class TreeOptions:
     polish_share: float = 0.6
     """Share of a wall-clock budget kept for the polish, at its end: CP-SAT
     (on ``workers`` threads) hinted with the tree's best schedule, whose
-    schedule replaces the tree's only when it is shorter (0: never). Only
-    where :func:`_polishes` holds: a zone problem that is not a pure FJSP (the
-    graph tabu search is stronger there), without setup times (CP-SAT's setup
-    circuits take seconds to build, and the polish was measured without
-    them), without a blocking oracle and with at most
-    ``portfolio_max_windows`` windows; and only with no work limit and a
-    polish of at least ``polish_min_time`` seconds. Tuned on the ``routes`` family with seeds
-    2-3 (``benchmarks/sweeps/polish_tune.toml``); the tables use seeds 0-1
-    (docs/scheduler.md, "Solvers: options", the polish)."""
+    schedule replaces the tree's only when it is shorter (0: never). Only on
+    a problem that is not a pure FJSP (the graph tabu search is stronger
+    there), without setup times (CP-SAT's setup circuits take seconds to
+    build, and the polish was measured without them), without a blocking
+    oracle, with at most ``portfolio_max_windows`` windows; and only with no
+    work limit and a polish of at least ``polish_min_time`` seconds. Tuned on the ``routes``
+    family with seeds 2-3 (``benchmarks/sweeps/polish_tune.toml``, 24
+    problems at 10 s): behind CP-SAT alone on 13 without the polish, on 10,
+    7 and 6 with shares 0.4, 0.6 and 0.8, mean makespan -0.46, -0.82 and
+    -0.80 %; 0.6 and 0.8 tie on the mean, and 0.6 keeps more time for the
+    tree's own search where CP-SAT is weak. The tables use seeds 0-1; the
+    check on a family it was not tuned on is ``benchmarks/results/polish.md``
+    (docs/scheduler.md, "Solvers: options")."""
     polish_min_time: float = 2.0
     """The shortest polish worth building CP-SAT's model for (seconds)."""
     fallback: bool = True
@@ -892,9 +896,9 @@ def _polish(
     t0: float,
 ) -> tuple[Solution, float, bool]:
     """The polish (:attr:`TreeOptions.polish_share`): CP-SAT until ``final``,
-    hinted with ``best``'s schedule. Returns the
-    better of the two schedules, the lower bound (CP-SAT's where it is
-    higher) and whether the schedule is proven optimal."""
+    hinted with ``best``'s schedule. Returns the better of the two schedules,
+    the lower bound (CP-SAT's where it is higher) and whether the schedule
+    is proven optimal."""
     from scheduler.cpsat import solve_cpsat
 
     ph = time.perf_counter()

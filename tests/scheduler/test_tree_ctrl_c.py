@@ -10,7 +10,8 @@ ended within seconds too: a Ctrl-C in that first instant used to raise out
 of the race's start, and the thread searched on until its 60 s limit. About
 1 instant in 25 was still lost (the solve ran to its limit) or left the
 thread running; ``test_ctrl_c_causes.py`` replays both causes at their
-exact instant.
+exact instant. The last test does the same inside the polish (CP-SAT on both
+workers, hinted with the tree's schedule, at the end of the budget).
 """
 
 from __future__ import annotations
@@ -82,5 +83,65 @@ def test_ctrl_c_stops_the_racing_cpsat_thread_promptly() -> None:
     assert len(rows) == 8, child.stdout + child.stderr
     for _, interrupted, since, left, gone in rows:
         assert interrupted == "True", child.stdout
+        assert float(since) < PROMPT, child.stdout
+        assert int(left) == 0 and float(gone) < PROMPT, child.stdout
+
+
+POLISH_CHILD = textwrap.dedent(
+    """
+    import os, random, signal, sys, threading, time
+    from scheduler import solve
+    from scheduler.families import random_routes_problem
+    from scheduler.tree import TreeOptions
+
+    p = random_routes_problem(4, 50, 5, 0, seed=2)
+    solve(p, "tree", time_limit=0.3, seed=0, waits=False)  # warm up (no polish at 0.3 s)
+    opt = TreeOptions(polish_share=0.9, polish_min_time=0.5)
+    rng = random.Random(int(sys.argv[1]))
+    for delay in [rng.uniform(2.4, 3.6) for _ in range(3)]:
+        before = set(threading.enumerate())
+        sent = []
+
+        def kill():
+            time.sleep(delay)
+            sent.append(time.perf_counter())
+            os.kill(os.getpid(), signal.SIGINT)
+
+        timer = threading.Thread(target=kill)
+        timer.start()
+        r = solve(p, "tree", time_limit=20.0, seed=0, waits=False, options=opt)
+        back = time.perf_counter()
+        timer.join()
+        while time.perf_counter() - back < 30.0:
+            left = list(set(threading.enumerate()) - before)
+            if not left:
+                break
+            time.sleep(0.02)
+        gone = time.perf_counter() - back
+        print(f"solve {r.stats.interrupted} {back - sent[0]:.3f} {len(left)} {gone:.3f} "
+              f"{'polish' in r.stats.phases} {r.schedule is not None}", flush=True)
+    """
+)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT is POSIX")
+def test_ctrl_c_during_the_polish_ends_cpsat_and_keeps_the_best_schedule() -> None:
+    """A Ctrl-C while the polish runs (CP-SAT hinted with the tree's schedule, from 2 s
+    of a 20 s budget on here; SIGINT at 2.4-3.6 s) returns the tree's best schedule at once, marked
+    interrupted, with CP-SAT's threads ended; seeded instants inside the polish."""
+    child = subprocess.run(
+        [sys.executable, "-c", POLISH_CHILD, "3"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=Path(__file__).resolve().parents[2],
+        check=False,
+    )
+    assert child.returncode == 0, child.stdout + child.stderr
+    rows = [ln.split() for ln in child.stdout.splitlines() if ln.startswith("solve ")]
+    assert len(rows) == 3, child.stdout + child.stderr
+    for _, interrupted, since, left, gone, polished, scheduled in rows:
+        assert interrupted == "True" and polished == "True", child.stdout
+        assert scheduled == "True", child.stdout
         assert float(since) < PROMPT, child.stdout
         assert int(left) == 0 and float(gone) < PROMPT, child.stdout
