@@ -27,7 +27,7 @@ import json
 import math
 from typing import Any
 
-from benchmarks.common import output_dir, publish, run_table_sweep, sweep_arguments, write
+from benchmarks.common import output_dir, publish, run_table_sweep, sweep_arguments
 
 NAME = "polish"
 
@@ -141,17 +141,8 @@ def main(argv: list[str] | None = None) -> None:
     )
     df = run_table_sweep(name, args, out)
     table = polish_table(df, title=title, sweep=name)
-    if not args.tune:
-        path = publish(NAME, df, table, out, quick=args.quick, flags="--fresh")
-        print(path.read_text())
-        return
-    from workcell.experiments.analysis import sweep_note
-
-    command = "python -m benchmarks.bench_polish --tune " + ("--quick" if args.quick else "--fresh")
-    note = sweep_note(df, sweep_file=[f"benchmarks/sweeps/{name}.toml"], command=command)
-    rows = json.loads(df.drop(columns=["dependencies"], errors="ignore").to_json(orient="records"))
-    data = {"command": command, "sweeps": [f"{name}.toml"], "quick": args.quick, "rows": rows}
-    path = write(name, data, table.rstrip("\n") + "\n\n" + note, out)
+    flags = "--tune --fresh" if args.tune else "--fresh"
+    path = publish(name, df, table, out, quick=args.quick, flags=flags, script="bench_polish")
     print(path.read_text())
 
 

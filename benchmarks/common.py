@@ -184,6 +184,7 @@ def publish(
     quick: bool = False,
     flags: str = "",
     extra: dict[str, Any] | None = None,
+    script: str | None = None,
 ) -> Path:
     """Write ``<out>/<name>.md`` (the table and its provenance note) and ``<name>.json``.
 
@@ -203,9 +204,12 @@ def publish(
         A smoke run (said in the command line of the note).
     flags : str
         Options of the command that reproduces the table (``--fresh`` for a
-        solver table: without it the script only renders recorded runs).
+        solver table: without it the script only renders recorded runs); a
+        quick run's command keeps them but ``--fresh``, and adds ``--quick``.
     extra : dict, optional
         More fields of the JSON.
+    script : str, optional
+        The module that reproduces the table (default: ``bench_<name>``).
 
     Returns
     -------
@@ -216,7 +220,14 @@ def publish(
 
     stems = sweeps or (name,)
     command = " ".join(
-        ["python -m benchmarks.bench_" + name, *(["--quick"] if quick else flags.split())]
+        [
+            "python -m benchmarks." + (script or "bench_" + name),
+            *(
+                [f for f in flags.split() if f != "--fresh"] + ["--quick"]
+                if quick
+                else flags.split()
+            ),
+        ]
     )
     files = [f"benchmarks/sweeps/{s}.toml" for s in stems]
     note = sweep_note(df, sweep_file=files, command=command)

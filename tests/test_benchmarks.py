@@ -59,3 +59,22 @@ def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
     data = json.loads(out[0].read_text())
     assert "machine" in data and ("seed" in data or "seeds" in data)
     assert (tmp_path / out[0].with_suffix(".md").name).is_file()
+
+
+def test_polish_tuning_smoke(tmp_path: Path) -> None:
+    """``bench_polish --tune --quick``: the tuning sweep's table, with its four tree
+    labels and CP-SAT, and a note whose command reruns the tuning sweep."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "benchmarks.bench_polish", "--tune", "--quick"],
+        cwd=ROOT,
+        env={**os.environ, "MULTIARM_RESULTS": str(tmp_path)},
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    text = (tmp_path / "polish_tune.md").read_text()
+    assert "| tree_off | tree_p40 | tree_p60 | tree_p80 | cpsat |" in text
+    assert "`python -m benchmarks.bench_polish --tune --quick`" in text
+    assert json.loads((tmp_path / "polish_tune.json").read_text())["quick"] is True
