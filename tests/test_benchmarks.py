@@ -13,6 +13,20 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def _run_quick(script: str, out: Path, *flags: str) -> None:
+    """``python -m benchmarks.<script> <flags> --quick`` writing into ``out``; it must succeed."""
+    proc = subprocess.run(
+        [sys.executable, "-m", f"benchmarks.{script}", *flags, "--quick"],
+        cwd=ROOT,
+        env={**os.environ, "MULTIARM_RESULTS": str(out)},
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+
+
 @pytest.mark.parametrize(
     "script",
     [
@@ -44,16 +58,7 @@ ROOT = Path(__file__).resolve().parents[1]
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
-    proc = subprocess.run(
-        [sys.executable, "-m", f"benchmarks.{script}", "--quick"],
-        cwd=ROOT,
-        env={**os.environ, "MULTIARM_RESULTS": str(tmp_path)},
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=300,
-    )
-    assert proc.returncode == 0, proc.stderr
+    _run_quick(script, tmp_path)
     out = list(tmp_path.glob("*.json"))
     assert out, "no JSON result written"
     data = json.loads(out[0].read_text())
@@ -64,16 +69,7 @@ def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
 def test_polish_tuning_smoke(tmp_path: Path) -> None:
     """``bench_polish --tune --quick``: the tuning sweep's table, with its four tree
     labels and CP-SAT, and a note whose command reruns the tuning sweep."""
-    proc = subprocess.run(
-        [sys.executable, "-m", "benchmarks.bench_polish", "--tune", "--quick"],
-        cwd=ROOT,
-        env={**os.environ, "MULTIARM_RESULTS": str(tmp_path)},
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=300,
-    )
-    assert proc.returncode == 0, proc.stderr
+    _run_quick("bench_polish", tmp_path, "--tune")
     text = (tmp_path / "polish_tune.md").read_text()
     assert "| tree_off | tree_p40 | tree_p60 | tree_p80 | cpsat |" in text
     assert "`python -m benchmarks.bench_polish --tune --quick`" in text

@@ -68,10 +68,12 @@ CHILD = textwrap.dedent(
 )
 
 
-@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT is POSIX")
-def test_ctrl_c_stops_the_racing_cpsat_thread_promptly() -> None:
+def _run_child(
+    code: str, seed: str, solves: int
+) -> tuple[subprocess.CompletedProcess[str], list[list[str]]]:
+    """Run ``code`` in a fresh Python with ``seed``; its ``solve ...`` lines, split (``solves`` of them)."""
     child = subprocess.run(
-        [sys.executable, "-c", CHILD, "5"],
+        [sys.executable, "-c", code, seed],
         capture_output=True,
         text=True,
         timeout=300,
@@ -80,7 +82,13 @@ def test_ctrl_c_stops_the_racing_cpsat_thread_promptly() -> None:
     )
     assert child.returncode == 0, child.stdout + child.stderr
     rows = [ln.split() for ln in child.stdout.splitlines() if ln.startswith("solve ")]
-    assert len(rows) == 8, child.stdout + child.stderr
+    assert len(rows) == solves, child.stdout + child.stderr
+    return child, rows
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT is POSIX")
+def test_ctrl_c_stops_the_racing_cpsat_thread_promptly() -> None:
+    child, rows = _run_child(CHILD, "5", 8)
     for _, interrupted, since, left, gone in rows:
         assert interrupted == "True", child.stdout
         assert float(since) < PROMPT, child.stdout
@@ -127,19 +135,9 @@ POLISH_CHILD = textwrap.dedent(
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT is POSIX")
 def test_ctrl_c_during_the_polish_ends_cpsat_and_keeps_the_best_schedule() -> None:
     """A Ctrl-C while the polish runs (CP-SAT hinted with the tree's schedule, from 2 s
-    of a 20 s budget on here; SIGINT at 2.4-3.6 s) returns the tree's best schedule at once, marked
-    interrupted, with CP-SAT's threads ended; seeded instants inside the polish."""
-    child = subprocess.run(
-        [sys.executable, "-c", POLISH_CHILD, "3"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=Path(__file__).resolve().parents[2],
-        check=False,
-    )
-    assert child.returncode == 0, child.stdout + child.stderr
-    rows = [ln.split() for ln in child.stdout.splitlines() if ln.startswith("solve ")]
-    assert len(rows) == 3, child.stdout + child.stderr
+    of a 20 s budget on here; SIGINT at seeded instants in 2.4-3.6 s) returns the tree's
+    best schedule at once, marked interrupted, with CP-SAT's threads ended."""
+    child, rows = _run_child(POLISH_CHILD, "3", 3)
     for _, interrupted, since, left, gone, polished, scheduled in rows:
         assert interrupted == "True" and polished == "True", child.stdout
         assert scheduled == "True", child.stdout
