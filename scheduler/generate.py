@@ -276,7 +276,9 @@ def random_setup_fjsp(
     max_time : int
         Largest processing time.
     setup_fraction : float
-        Largest raw setup time as a fraction of ``max_time``.
+        Largest raw setup time as a fraction of ``max_time``. When it rounds
+        to no setup at all (below ``0.5 / max_time``), the problem is a plain
+        FJSP without a setup matrix.
 
     Returns
     -------
@@ -332,6 +334,8 @@ def random_setup_fjsp(
         left -= size
         job += 1
     top = round(setup_fraction * max_time)
+    if top == 0:  # no setups at all: a plain FJSP (no setup matrix of zeros)
+        return m.build()
     raw = rng.integers(0, top + 1, size=(n_machines, n_ops + 1, n_ops))
     times = np.stack([metric_closure(raw[k]) for k in range(n_machines)])
     m.set_setup(MatrixSetup(times))
