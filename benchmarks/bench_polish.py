@@ -6,8 +6,19 @@ wall-clock budget to CP-SAT hinted with the tree's best schedule
 
 * ``--tune``: ``benchmarks/sweeps/polish_tune.toml``, the ``routes``
   problems of the outside table with seeds 2-3 (the table uses 0-1), the
-  tree with the polish off, at 0.3 and at 0.6 of the budget, and CP-SAT
+  tree with the polish off, at 0.4, 0.6 and 0.8 of the budget, and CP-SAT
   alone, at 10 s each; writes ``polish_tune.md``.
+* ``--fjsp``: ``benchmarks/sweeps/polish_fjsp_tune.toml``, the tuning of
+  ``TreeOptions.polish_fjsp_max_tasks`` on random FJSPs without setups
+  (:func:`scheduler.generate.random_setup_fjsp`, ``setup_fraction = 0``),
+  the tree without the FJSP polish and with it at every size, and CP-SAT
+  alone; writes ``polish_fjsp_tune.md``. Its check is the FJSP table
+  (``bench_fjsp``).
+* ``--setups``: ``benchmarks/sweeps/polish_setup_tune.toml``, the tuning of
+  ``TreeOptions.polish_setup_max_tasks`` on the ``stations`` problems (travel
+  setups) of the outside table up to 50 tasks, with seeds 2-3; writes
+  ``polish_setup_tune.md``. Its checks are the outside table's ``stations``
+  rows (seeds 0-1) and the generated, lines and setups tables.
 * default: ``benchmarks/sweeps/polish.toml``, the check on a family the
   share was not tuned on, :func:`scheduler.generate.random_problem` without
   travel setups: the tree with the polish off and with its default, and
@@ -17,7 +28,7 @@ Each table gives, per problem, every label's makespan ('(optimal)' where
 the run proved it) and, per tree label, how often it is behind CP-SAT and
 how it compares with the tree without the polish.
 
-Run: ``python -m benchmarks.bench_polish [--tune] [--fresh] [--workers N] [--quick]``.
+Run: ``python -m benchmarks.bench_polish [--tune | --fjsp | --setups] [--fresh] [--workers N] [--quick]``.
 """
 
 from __future__ import annotations
@@ -31,12 +42,36 @@ from benchmarks.common import output_dir, publish, run_table_sweep, sweep_argume
 
 NAME = "polish"
 
+_OFF = "the tree without the polish (`polish_share=0`)"
+SWEEPS: dict[str, tuple[str, str, str]] = {
+    "": (
+        NAME,
+        "The polish on random_problem without setups (a family it was not tuned on)",
+        _OFF,
+    ),
+    "tune": ("polish_tune", "Tuning the polish share on the routes family (seeds 2-3)", _OFF),
+    "fjsp": (
+        "polish_fjsp_tune",
+        "Tuning the polish's size rule on random FJSPs without setups (seeds 0-1)",
+        "the tree as it is by default, without the polish on a pure FJSP",
+    ),
+    "setups": (
+        "polish_setup_tune",
+        "Tuning the polish's size rule on stations problems with travel setups (seeds 2-3)",
+        "the tree as it is by default, without the polish on setup times",
+    ),
+}
+"""The sweeps by command-line flag ('': the default): sweep name, title, what
+the ``tree_off`` label is."""
+
 
 def _fmt(x: float) -> str:
     return f"{x:g}" if math.isfinite(x) else "none"
 
 
-def polish_table(df: Any, *, title: str, sweep: str, off: str = "tree_off") -> str:
+def polish_table(
+    df: Any, *, title: str, sweep: str, off: str = "tree_off", off_text: str = _OFF
+) -> str:
     """The Markdown table of ``polish.md`` or ``polish_tune.md`` from a sweep's results.
 
     Parameters
@@ -50,6 +85,8 @@ def polish_table(df: Any, *, title: str, sweep: str, off: str = "tree_off") -> s
         The sweep file's stem (named in the text).
     off : str
         The label of the tree without the polish.
+    off_text : str
+        What ``off`` is, in the table's text.
 
     Returns
     -------
@@ -81,8 +118,8 @@ def polish_table(df: Any, *, title: str, sweep: str, off: str = "tree_off") -> s
         "",
         f"{tl:g} s per run on the machine's 2 cores (sweep `benchmarks/sweeps/{sweep}.toml`); "
         f"size = arms x tasks x zones x tools, '-nowait': solved with `waits=False`. `{off}`: "
-        "the tree without the polish (`polish_share=0`); `cpsat`: CP-SAT alone on 2 workers; "
-        "the other labels: the tree with the polish at that share. '(optimal)': the run proved "
+        f"{off_text}; `cpsat`: CP-SAT alone on 2 workers; the other labels: the tree with "
+        "the polish (see the sweep file for its options). '(optimal)': the run proved "
         "its schedule optimal.",
         "",
         "| problem | tasks | " + " | ".join(labels) + " |",
@@ -126,22 +163,23 @@ def main(argv: list[str] | None = None) -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     sweep_arguments(ap)
-    ap.add_argument(
-        "--tune",
-        action="store_true",
-        help="run the tuning sweep polish_tune.toml instead (writes polish_tune.md)",
-    )
+    which = ap.add_mutually_exclusive_group()
+    for flag, (sweep, _title, _off) in SWEEPS.items():
+        if flag:
+            which.add_argument(
+                f"--{flag}",
+                dest="which",
+                action="store_const",
+                const=flag,
+                help=f"run the tuning sweep {sweep}.toml instead (writes {sweep}.md)",
+            )
     args = ap.parse_args(argv)
+    flag = args.which or ""
+    name, title, off_text = SWEEPS[flag]
+    flags = f"--{flag} --fresh" if flag else "--fresh"
     out = output_dir(args.quick)
-    name = "polish_tune" if args.tune else NAME
-    title = (
-        "Tuning the polish share on the routes family (seeds 2-3)"
-        if args.tune
-        else "The polish on random_problem without setups (a family it was not tuned on)"
-    )
     df = run_table_sweep(name, args, out)
-    table = polish_table(df, title=title, sweep=name)
-    flags = "--tune --fresh" if args.tune else "--fresh"
+    table = polish_table(df, title=title, sweep=name, off_text=off_text)
     path = publish(name, df, table, out, quick=args.quick, flags=flags, script="bench_polish")
     print(path.read_text())
 

@@ -74,3 +74,23 @@ def test_polish_tuning_smoke(tmp_path: Path) -> None:
     assert "| tree_off | tree_p40 | tree_p60 | tree_p80 | cpsat |" in text
     assert "`python -m benchmarks.bench_polish --tune --quick`" in text
     assert json.loads((tmp_path / "polish_tune.json").read_text())["quick"] is True
+
+
+@pytest.mark.parametrize(
+    ("flag", "name", "off"),
+    [("--fjsp", "polish_fjsp_tune", "pure FJSP"), ("--setups", "polish_setup_tune", "setup times")],
+)
+def test_polish_size_rule_tuning_smoke(flag: str, name: str, off: str, tmp_path: Path) -> None:
+    """``bench_polish --fjsp`` / ``--setups`` with ``--quick``: the size rule's tuning
+    table (the tree without that polish, with it, CP-SAT), saying what ``tree_off`` is."""
+    _run_quick("bench_polish", tmp_path, flag)
+    text = (tmp_path / f"{name}.md").read_text()
+    assert "| tree_off | tree_polish | cpsat |" in text and off in text
+    assert f"`python -m benchmarks.bench_polish {flag} --quick`" in text
+
+
+def test_polish_sweeps_are_exclusive() -> None:
+    from benchmarks import bench_polish
+
+    with pytest.raises(SystemExit):
+        bench_polish.main(["--tune", "--fjsp", "--quick"])

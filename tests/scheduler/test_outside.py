@@ -234,10 +234,10 @@ def test_cpsat_reports_the_bounds_it_proves_only_on_an_exact_model() -> None:
 
 
 def test_polish_rule_follows_the_problem_and_the_options() -> None:
-    """The polish (TreeOptions.polish_share) may run on a zone problem without setups;
-    never on one with setups, beyond portfolio_max_windows, with a blocking oracle or
-    with a share of 0; a pure FJSP is left to the graph tabu search (checked in
-    solve_tree, below)."""
+    """The polish (TreeOptions.polish_share) may run on a zone problem without setups,
+    and with setups up to polish_setup_max_tasks tasks; never beyond
+    portfolio_max_windows, with a blocking oracle or with a share of 0; the size rule
+    of a pure FJSP is checked in solve_tree (below)."""
     from scheduler.tree import _may_polish
 
     routes = generate_problem("routes", 3, 30, 3, 1, seed=1)
@@ -246,11 +246,17 @@ def test_polish_rule_follows_the_problem_and_the_options() -> None:
     assert _may_polish(routes, opt)
     assert not _may_polish(routes, TreeOptions(polish_share=0.0))
     assert not _may_polish(routes, TreeOptions(portfolio_max_windows=5))
-    assert not _may_polish(stations, opt)  # travel setups
-    assert not _may_polish(generate_problem("zones", 3, 8, 2, 1, seed=1), opt)  # small, setups
+    assert _may_polish(stations, opt)  # travel setups, 20 tasks <= polish_setup_max_tasks
+    big = generate_problem("stations", 3, 50, 3, 1, seed=1)
+    assert opt.polish_setup_max_tasks < 50 and not _may_polish(big, opt)
+    assert _may_polish(generate_problem("zones", 3, 8, 2, 1, seed=1), opt)  # small, setups
     assert _may_polish(generate_problem("zones", 3, 8, 2, 1, seed=1, setups=False), opt)
     blocked = generate_problem("zones", 3, 8, 2, 1, seed=1, setups=False, blocking=True)
     assert blocked.blocking is not None and not _may_polish(blocked, opt)
+    # setups: up to polish_setup_max_tasks tasks only
+    assert _may_polish(stations, TreeOptions(polish_setup_max_tasks=20))
+    assert not _may_polish(stations, TreeOptions(polish_setup_max_tasks=19))
+    assert not _may_polish(stations, TreeOptions(polish_setup_max_tasks=20, polish_share=0.0))
 
 
 @pytest.mark.parametrize("bad", [-0.1, 1.0, "0.3", None], ids=["negative", "one", "str", "none"])
@@ -259,6 +265,13 @@ def test_polish_share_is_validated(bad: object) -> None:
         TreeOptions(polish_share=bad)  # type: ignore[arg-type]
     with pytest.raises(UsageError, match="polish_min_time"):
         TreeOptions(polish_min_time=-1.0)
+
+
+@pytest.mark.parametrize("name", ["polish_fjsp_max_tasks", "polish_setup_max_tasks"])
+@pytest.mark.parametrize("bad", [-1, 2.5, True, "10"], ids=["negative", "float", "bool", "str"])
+def test_polish_size_rules_are_validated(name: str, bad: object) -> None:
+    with pytest.raises(UsageError, match=name):
+        TreeOptions(**{name: bad})  # type: ignore[arg-type]
 
 
 def test_polish_hands_the_tree_s_schedule_to_cpsat_and_keeps_the_better() -> None:
@@ -297,7 +310,8 @@ def test_polish_hands_the_tree_s_schedule_to_cpsat_and_keeps_the_better() -> Non
 def test_polish_runs_only_within_its_rule() -> None:
     """solve_tree polishes a routes problem when the share of its limit reaches
     polish_min_time (stats: the phase, CP-SAT's status); not with a shorter limit, not
-    on a work limit (those stay repeatable), not on a pure FJSP."""
+    on a work limit (those stay repeatable), not on a pure FJSP above
+    polish_fjsp_max_tasks nor on setups above polish_setup_max_tasks."""
     p = generate_problem("routes", 3, 30, 3, 1, seed=1)
     opt = TreeOptions(polish_share=0.5, polish_min_time=0.5)
     on = solve_tree(p, 1.2, 0, options=opt)
@@ -308,4 +322,21 @@ def test_polish_runs_only_within_its_rule() -> None:
     from scheduler.fjsp import parse_fjsp
 
     f = parse_fjsp("2 2\n2 1 1 3 1 2 2\n1 2 1 1 2 2\n")
-    assert "polish" not in solve_tree(f, 1.2, 0, options=opt).stats.phases
+    no_fjsp = TreeOptions(polish_share=0.5, polish_min_time=0.5, polish_fjsp_max_tasks=0)
+    assert "polish" not in solve_tree(f, 1.2, 0, options=no_fjsp).stats.phases
+    # a pure FJSP the graph search does not prove in 0.6 s: polished within its size rule
+    g = generate_problem("setup_fjsp", 8, 80, 0, 0, seed=0, setup_fraction=0.0)
+    assert g._setup.zero
+    within = TreeOptions(polish_share=0.5, polish_min_time=0.5, polish_fjsp_max_tasks=80)
+    on_g = solve_tree(g, 1.2, 0, options=within)
+    assert on_g.stats.extra.get("polish") in ("optimal", "feasible")
+    assert "polish" not in solve_tree(g, 1.2, 0, options=opt).stats.phases  # default: 60
+    small = TreeOptions(polish_share=0.5, polish_min_time=0.5, polish_fjsp_max_tasks=79)
+    assert "polish" not in solve_tree(g, 1.2, 0, options=small).stats.phases
+    # setups: polished up to polish_setup_max_tasks tasks only
+    s = generate_problem("stations", 3, 30, 3, 1, seed=1)
+    with_setups = TreeOptions(polish_share=0.5, polish_min_time=0.5, polish_setup_max_tasks=30)
+    on_s = solve_tree(s, 1.2, 0, options=with_setups)
+    assert on_s.stats.extra.get("polish") in ("optimal", "feasible")
+    below = TreeOptions(polish_share=0.5, polish_min_time=0.5, polish_setup_max_tasks=29)
+    assert "polish" not in solve_tree(s, 1.2, 0, options=below).stats.phases
