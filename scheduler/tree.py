@@ -139,13 +139,14 @@ class TreeOptions:
     polish_share: float = 0.6
     """Share of a wall-clock budget kept for the polish, at its end: CP-SAT
     (on ``workers`` threads) hinted with the tree's best schedule, whose
-    schedule replaces the tree's only when it is shorter (0: never). Only on
-    a pure FJSP of at most ``polish_fjsp_max_tasks`` tasks (above, the graph
-    tabu search is as strong alone), on a problem with setup times of at
-    most ``polish_setup_max_tasks`` tasks (CP-SAT's setup circuits take
-    seconds to build on larger ones), without a blocking oracle, with at
-    most ``portfolio_max_windows`` windows; and only with no work limit and
-    a polish of at least ``polish_min_time`` seconds. Tuned on the ``routes``
+    schedule replaces the tree's only when it is shorter (0: never). A pure
+    FJSP gets it only up to ``polish_fjsp_max_tasks`` tasks (on larger ones
+    the graph tabu search does as well or better alone), a problem with
+    setup times only up to ``polish_setup_max_tasks`` tasks (CP-SAT's setup
+    circuits take seconds to build on larger ones); never a problem with a
+    blocking oracle or more than ``portfolio_max_windows`` windows; and only
+    with no work limit and a polish of at least ``polish_min_time`` seconds.
+    Tuned on the ``routes``
     family with seeds 2-3 (``benchmarks/sweeps/polish_tune.toml``, 24
     problems at 10 s): behind CP-SAT alone on 13 without the polish, on 10,
     7 and 6 with shares 0.4, 0.6 and 0.8, mean makespan -0.46, -0.82 and
