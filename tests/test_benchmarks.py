@@ -54,6 +54,7 @@ def _run_quick(script: str, out: Path, *flags: str) -> None:
         "bench_urdf",
         "bench_policies",
         "gap_anatomy",
+        "bench_longrun",
         "bench_bounds",
     ],
 )

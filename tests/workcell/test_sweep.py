@@ -207,6 +207,11 @@ def test_a_local_run_records_validated_makespans_and_provenance(tmp_path: Path) 
     assert json.loads(str(tree["options"])) == {"max_evaluations": 60, "workers": 1}
     assert math.isnan(tree["time_limit"]) and tree["evaluations"] > 0
     assert json.loads(str(tree["improvements"]))[-1][1] == tree["makespan"]
+    phases = json.loads(str(tree["phases"]))
+    assert phases and all(isinstance(v, float) and v >= 0 for v in phases.values())
+    assert "improve" in phases or "exact" in phases
+    greedy = df[df["solver"] == "greedy"].iloc[0]
+    assert set(json.loads(str(greedy["phases"]))) == {"bound"}
 
 
 def test_an_interrupted_sweep_resumes_without_redoing_finished_runs(tmp_path: Path) -> None:

@@ -57,6 +57,7 @@ COLUMNS: dict[str, str] = {
     "best_time": "float64",
     "first_objective": "float64",
     "improvements": "string",
+    "phases": "string",
     "nodes": "int64",
     "pruned": "int64",
     "evaluations": "int64",
@@ -85,7 +86,11 @@ included), ``build_time`` building it (0 when cached in the worker),
 ``warmup_time`` loading the scheduler's compiled kernel before the
 solver's clock started (once per process, else 0).
 ``improvements`` is a JSON list of ``[seconds, makespan]`` pairs (each
-improved incumbent); ``options``, ``instance_params`` and ``dependencies``
+improved incumbent); ``phases`` a JSON object of the solver's
+phases and the seconds each took (every solver's ``bound``, CP-SAT's
+``model``, the tree's ``beam``, ``improve``, ``polish``, ``exact``, ...;
+empty for a ``benchmark`` run or an error, null in files written before
+the column existed); ``options``, ``instance_params`` and ``dependencies``
 are JSON objects. ``status`` is a :class:`scheduler.SolveStatus` value or
 ``"error"`` (then ``error_type`` and ``error`` say what happened) or, for a
 ``benchmark`` run, ``"measured"``: then ``metrics`` holds what its
@@ -169,6 +174,7 @@ def result_row(
         "best_time": float(s.best_time),
         "first_objective": float(s.first_objective),
         "improvements": json.dumps([[float(t), float(v)] for t, v in s.improvements]),
+        "phases": json.dumps({str(k): float(v) for k, v in s.phases.items()}, sort_keys=True),
         "nodes": int(s.nodes),
         "pruned": int(s.pruned),
         "evaluations": int(s.evaluations),
@@ -250,6 +256,7 @@ def benchmark_row(run: Run, measured: Any, *, wall_time: float, started: float) 
             "best_time": nan,
             "first_objective": nan,
             "improvements": "[]",
+            "phases": "{}",
             "error_type": "",
             "error": "",
             "metrics": json.dumps(_plain(list(rows), run.instance.source), allow_nan=True),
@@ -295,6 +302,7 @@ def error_row(
             "best_time": nan,
             "first_objective": math.inf,
             "improvements": "[]",
+            "phases": "{}",
             "error_type": type(exc).__name__,
             "error": f"{exc}\n{detail}".strip(),
             "metrics": "",
