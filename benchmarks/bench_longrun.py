@@ -132,9 +132,7 @@ def summarise(df: Any, reference: dict[str, dict[str, Any]]) -> list[dict[str, A
         )
         longest = rows.iloc[-1]
         curve_raw = json.loads(longest["improvements"]) if longest["improvements"] else []
-        curve = {
-            t: best_at(curve_raw, t) for t in CHECKPOINTS if t <= float(longest["time_limit"])
-        }
+        curve = {t: best_at(curve_raw, t) for t in CHECKPOINTS if t <= float(longest["time_limit"])}
         first = runs.get(min(runs), math.nan) if runs else math.nan
         closed = (
             (first - best) / (first - bound)
@@ -201,9 +199,7 @@ def render(cells: list[dict[str, Any]], png: str | None) -> str:
         cols = []
         for t in limits:
             mk = c["runs"].get(t)
-            cols.append(
-                "-" if mk is None else f"{mk:.2f} | {_pct((mk - c['bound']) / c['bound'])}"
-            )
+            cols.append("-" if mk is None else f"{mk:.2f} | {_pct((mk - c['bound']) / c['bound'])}")
         lines.append(
             f"| {c['cell']} | {c['tasks']} | {c['bound']:.2f} | {c['bound_source']} | "
             f"{'yes' if c['proven'] else 'no'} | "

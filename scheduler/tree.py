@@ -180,6 +180,29 @@ class TreeOptions:
     36 and 40 tasks) and higher on none; at 50 tasks higher on 2, lower on
     none (CP-SAT's setup circuits are slow to build there, and CP-SAT alone
     was 8-27 % behind the tree)."""
+    exact_polish_share: float = 0.3
+    """Share of a wall-clock budget kept, at its end, for the exact branch and
+    bound (:func:`scheduler.exact.prove`) started from the tree's best
+    schedule, on problems the CP-SAT polish and race leave alone (a blocking
+    oracle, more than ``portfolio_max_windows`` windows: the compiled cells),
+    larger than ``exact_max_tasks`` and of at most ``exact_polish_max_tasks``
+    tasks, where the exact search applies (:func:`scheduler.exact.applicable`,
+    an idle oracle dropped first) and never on a pure FJSP (0: never). Its
+    first search fixes the incumbent's modes and branches on the pairwise
+    orders in the zones, times found by longest paths: it reaches schedules
+    the list and sequence decoders cannot give (an arm kept back at a border
+    so that another passes first) and keeps the better schedule. Only with
+    no work limit and at least ``polish_min_time`` seconds for it. Tuned on
+    variants of ``scara4`` (block sides 0.2 and 0.45 m, sampled part
+    arrivals with seeds 1-2, 3 and 4 products; seeds 0-1 at 10 s): on the
+    20-task ones 0.3 ended lower than without on 4 of 8 (by 0.4-1.3 s),
+    higher on 1 (by 0.05 s); 0.5 did the same there and worse on the
+    30-40-task ones (docs/scheduler.md, "Solvers: options")."""
+    exact_polish_max_tasks: int = 24
+    """The largest problem the exact polish runs on (see ``exact_polish_share``;
+    0: never). From the same tuning: at 30 tasks 0.3 was higher on average
+    than without (one run by 1.6 s) and at 40 within the search's noise of
+    1-2 s, so the rule stops between 20 and 30."""
     fallback: bool = True
     """When no list order decodes, ask CP-SAT (one worker) within the budget
     left (:mod:`scheduler.fallback`)."""
@@ -204,6 +227,7 @@ class TreeOptions:
             "portfolio_max_windows": 0,
             "polish_fjsp_max_tasks": 0,
             "polish_setup_max_tasks": 0,
+            "exact_polish_max_tasks": 0,
         }
         for name, least in ints.items():
             v = getattr(self, name)
@@ -213,10 +237,10 @@ class TreeOptions:
             v = getattr(self, name)
             if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
                 raise UsageError(f"TreeOptions.{name} must be an int >= 1 or None, got {v!r}")
-        if not isinstance(self.polish_share, int | float) or not (0.0 <= self.polish_share < 1.0):
-            raise UsageError(
-                f"TreeOptions.polish_share must be in [0, 1), got {self.polish_share!r}"
-            )
+        for name in ("polish_share", "exact_polish_share"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int | float) or not (0.0 <= v < 1.0):
+                raise UsageError(f"TreeOptions.{name} must be in [0, 1), got {v!r}")
         for name in ("beam_share", "improve_share"):
             v = getattr(self, name)
             if not isinstance(v, int | float) or not (0.0 < v <= 1.0):
@@ -603,9 +627,11 @@ def _solve_tree(
     p = problem
     ev = st.ev
     polish = polish and (not pure_fjsp(ev) or p.n_tasks <= opt.polish_fjsp_max_tasks)
+    xq = None if polish else _exact_polish_problem(p, ev, time_limit, opt)
     # the tree's own search (and a racing CP-SAT, and the worker processes)
     # ends here; the polish, if any, has the time from here to ``final``
-    deadline = final - opt.polish_share * time_limit if polish and time_limit else final
+    share = opt.polish_share if polish else opt.exact_polish_share if xq is not None else 0.0
+    deadline = final - share * time_limit if share and time_limit else final
     best: Solution | None = st.first  # the HEFT list, recorded as the first incumbent
     race: _Race | None = None
 
@@ -876,6 +902,14 @@ def _solve_tree(
             and final - time.perf_counter() > 0.1
         ):
             best, lb, proven = _polish(p, ev, best, lb, final, waits, seed, opt, stats, t0)
+        if (
+            xq is not None
+            and best is not None
+            and not proven
+            and not (stats.interrupted or ctrl_c.hit)
+            and final - time.perf_counter() > 0.1
+        ):
+            best, lb, proven = _exact_polish(xq, ev, best, lb, final, waits, stats, t0, stop)
         if best is None and not proven and opt.fallback and not (stats.interrupted or ctrl_c.hit):
             # no list order decodes (start zones dead-locking): ask CP-SAT within the budget left
             from scheduler.fallback import exact_fallback
@@ -951,6 +985,71 @@ def _polish(
     lb = max(lb, cp.bound) if math.isfinite(cp.bound) else lb
     proven = cp.status is SolveStatus.OPTIMAL and best.makespan <= cp.objective + 1e-9
     return best, lb, proven or best.makespan <= lb + 1e-9
+
+
+def _exact_polish_problem(
+    p: Problem, ev: Evaluator, time_limit: float | None, opt: TreeOptions
+) -> Problem | None:
+    """The problem the exact polish (:attr:`TreeOptions.exact_polish_share`)
+    searches (``p`` without an idle blocking oracle), or None where it does
+    not run: a work limit or too short a budget, a size outside
+    ``exact_max_tasks < n <= exact_polish_max_tasks``, a pure FJSP, a
+    problem the CP-SAT race takes, or one the exact search does not apply
+    to (a binding oracle among them)."""
+    if (
+        time_limit is None
+        or opt.max_evaluations is not None
+        or opt.exact_polish_share <= 0.0
+        or time_limit * opt.exact_polish_share < opt.polish_min_time
+        or not (opt.exact_max_tasks < p.n_tasks <= opt.exact_polish_max_tasks)
+        or pure_fjsp(ev)
+        or _races(p, opt, False)
+    ):
+        return None
+    q = exact.without_idle_oracle(p) if p.blocking is not None else p
+    ok, _why = exact.applicable(q, p.n_tasks)
+    return q if ok else None
+
+
+def _exact_polish(
+    q: Problem,
+    ev: Evaluator,
+    best: Solution,
+    lb: float,
+    final: float,
+    waits: bool,
+    stats: SearchStats,
+    t0: float,
+    stop: Any,
+) -> tuple[Solution, float, bool]:
+    """The exact polish (:attr:`TreeOptions.exact_polish_share`):
+    :func:`scheduler.exact.prove` on ``q`` until ``final``, from ``best``'s
+    schedule. Returns the better of the two schedules, the lower bound (the
+    search's where it is higher) and whether the schedule is proven
+    optimal."""
+    ph = time.perf_counter()
+    inc = None
+    if best.state is None:
+        inc = stats.extra.get("worker_schedule") or stats.extra.get("exact_schedule")
+    if inc is None:
+        inc = ev.schedule(best)
+    try:
+        res = exact.prove(
+            q, max(0.05, final - ph), None, incumbent=inc, lower=lb, waits=waits, stop=stop
+        )
+    finally:  # also on Ctrl-C, which solve_tree turns into the best schedule so far
+        stats.phases["exact_polish"] = time.perf_counter() - ph
+    stats.extra["exact_polish"] = "proven" if res.proven else res.reason
+    stats.nodes += res.nodes
+    stats.pruned += res.pruned
+    if res.schedule is not None and res.makespan < best.makespan - 1e-9:
+        stats.extra.pop("worker_schedule", None)  # _finish reads the kept schedule here
+        stats.extra["exact_schedule"] = res.schedule
+        stats.record(time.perf_counter() - t0, res.makespan)
+        best = _solution_of(res.schedule, res.makespan)
+    if math.isfinite(res.bound):
+        lb = max(lb, min(res.bound, best.makespan))
+    return best, lb, res.proven or best.makespan <= lb + 1e-9
 
 
 def _prove(

@@ -30,7 +30,11 @@ def test_summarise_splits_the_gap() -> None:
     """The 10 s plan of 130 against a bound of 100 and a best known of 120 (a
     longer run): a third of its gap is the plan's."""
     df = pd.DataFrame(
-        _rows("c", {10.0: 130.0, 60.0: 125.0, 300.0: 120.0}, [[0.5, 140.0], [4.0, 131.0], [200.0, 120.0]])
+        _rows(
+            "c",
+            {10.0: 130.0, 60.0: 125.0, 300.0: 120.0},
+            [[0.5, 140.0], [4.0, 131.0], [200.0, 120.0]],
+        )
     )
     ref = {"c": {"best bound (s)": 100.0, "exact (s)": "-", "proven?": "no"}}
     (c,) = summarise(df, ref)
@@ -58,7 +62,9 @@ def test_summarise_takes_the_exact_schedule_and_the_proven_optimum() -> None:
     assert p["share_of_gap_closed"] == pytest.approx(1.0)
     assert q["bound"] == 80.0 and q["bound_source"] == "lower_bound"
     assert q["share_of_gap_closed"] == 0.0
-    assert math.isnan(summarise(pd.DataFrame(_rows("r", {10.0: 80.0}, [])), {})[0]["share_of_gap_closed"])
+    assert math.isnan(
+        summarise(pd.DataFrame(_rows("r", {10.0: 80.0}, [])), {})[0]["share_of_gap_closed"]
+    )
 
 
 def test_best_at_and_missing_reference(tmp_path: Path) -> None:

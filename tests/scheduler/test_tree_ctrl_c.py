@@ -10,8 +10,9 @@ ended within seconds too: a Ctrl-C in that first instant used to raise out
 of the race's start, and the thread searched on until its 60 s limit. About
 1 instant in 25 was still lost (the solve ran to its limit) or left the
 thread running; ``test_ctrl_c_causes.py`` replays both causes at their
-exact instant. The last test does the same inside the polish (CP-SAT on both
-workers, hinted with the tree's schedule, at the end of the budget).
+exact instant. The last tests do the same inside the polish (CP-SAT on both
+workers, hinted with the tree's schedule, at the end of the budget) and the
+exact polish (the branch and bound from the tree's schedule).
 """
 
 from __future__ import annotations
@@ -143,3 +144,46 @@ def test_ctrl_c_during_the_polish_ends_cpsat_and_keeps_the_best_schedule() -> No
         assert scheduled == "True", child.stdout
         assert float(since) < PROMPT, child.stdout
         assert int(left) == 0 and float(gone) < PROMPT, child.stdout
+
+
+EXACT_CHILD = textwrap.dedent(
+    """
+    import os, random, signal, sys, threading, time
+    from scheduler import solve
+    from scheduler.generate import generate_problem
+    from scheduler.tree import TreeOptions
+
+    p = generate_problem("stations", 3, 16, 3, 1, seed=1)
+    # no race and no CP-SAT polish (as on a compiled cell's thousands of windows)
+    opt = TreeOptions(portfolio_max_windows=5, exact_polish_share=0.9, polish_min_time=0.5)
+    solve(p, "tree", time_limit=0.3, seed=0)  # warm up (no exact polish at 0.3 s)
+    rng = random.Random(int(sys.argv[1]))
+    for delay in [rng.uniform(2.4, 3.6) for _ in range(3)]:
+        sent = []
+
+        def kill():
+            time.sleep(delay)
+            sent.append(time.perf_counter())
+            os.kill(os.getpid(), signal.SIGINT)
+
+        timer = threading.Thread(target=kill)
+        timer.start()
+        r = solve(p, "tree", time_limit=20.0, seed=0, options=opt)
+        back = time.perf_counter()
+        timer.join()
+        print(f"solve {r.stats.interrupted} {back - sent[0]:.3f} "
+              f"{'exact_polish' in r.stats.phases} {r.schedule is not None}", flush=True)
+    """
+)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT is POSIX")
+def test_ctrl_c_during_the_exact_polish_keeps_the_best_schedule() -> None:
+    """A Ctrl-C while the exact polish runs (the branch and bound from the tree's
+    schedule, from 2 s of a 20 s budget on here; SIGINT at seeded instants in
+    2.4-3.6 s) returns the best schedule at once, marked interrupted."""
+    child, rows = _run_child(EXACT_CHILD, "4", 3)
+    for _, interrupted, since, polished, scheduled in rows:
+        assert interrupted == "True" and polished == "True", child.stdout
+        assert scheduled == "True", child.stdout
+        assert float(since) < PROMPT, child.stdout
