@@ -18,7 +18,8 @@ two processes on the machine's two cores), sweep
   5, ..., 300 s). The curve holds the main process's improvements as they
   came and a worker process's best only at the moment it was found (a
   worker reports once, at the end), so it may lie above what the search
-  held at a moment, never below;
+  held at a moment, never below (likewise a last phase of the tree, e.g.
+  its exact polish, which records its schedule as it ends);
 * ``docs/images/longrun.png`` (``longrun.png`` in the temporary directory
   with ``--quick``): the curves as makespan over the best bound, with the
   independent runs as dots.
@@ -132,7 +133,12 @@ def summarise(df: Any, reference: dict[str, dict[str, Any]]) -> list[dict[str, A
         )
         longest = rows.iloc[-1]
         curve_raw = json.loads(longest["improvements"]) if longest["improvements"] else []
-        curve = {t: best_at(curve_raw, t) for t in CHECKPOINTS if t <= float(longest["time_limit"])}
+        limit = float(longest["time_limit"])
+        # at the limit: everything the run returned (a last phase, e.g. the tree's
+        # exact polish, records its schedule as it ends, a moment past the limit)
+        curve = {
+            t: best_at(curve_raw, t if t < limit else math.inf) for t in CHECKPOINTS if t <= limit
+        }
         first = runs.get(min(runs), math.nan) if runs else math.nan
         closed = (
             (first - best) / (first - bound)
@@ -213,8 +219,10 @@ def render(cells: list[dict[str, Any]], png: str | None) -> str:
         "## The longest run's improvement curve (best makespan found by each moment, s)",
         "",
         "A worker process reports its best once, at the end, with the moment it found "
-        "it: its earlier improvements are not in the curve, so the curve may lie above "
-        "what the search held at a moment, never below. '-': no schedule yet.",
+        "it, and the tree's last phase (a polish) records its schedule as the phase "
+        "ends (the last column holds everything the run returned): earlier "
+        "improvements are not in the curve, so it may lie above what the search held "
+        "at a moment, never below. '-': no schedule yet.",
         "",
         "| cell | run (s) | " + " | ".join(f"{t:g} s" for t in cps) + " |",
         "|---|---|" + "---|" * len(cps),

@@ -33,7 +33,7 @@ def test_summarise_splits_the_gap() -> None:
         _rows(
             "c",
             {10.0: 130.0, 60.0: 125.0, 300.0: 120.0},
-            [[0.5, 140.0], [4.0, 131.0], [200.0, 120.0]],
+            [[0.5, 140.0], [4.0, 131.0], [200.0, 121.0], [300.02, 120.0]],
         )
     )
     ref = {"c": {"best bound (s)": 100.0, "exact (s)": "-", "proven?": "no"}}
@@ -42,7 +42,8 @@ def test_summarise_splits_the_gap() -> None:
     assert c["best_known"] == 120.0 and c["best_from"] == "these runs"
     assert c["share_of_gap_closed"] == pytest.approx(1 / 3)
     assert c["shortest_above_best"] == pytest.approx(10 / 120)
-    assert c["curve"][1.0] == 140.0 and c["curve"][5.0] == 131.0 and c["curve"][300.0] == 120.0
+    assert c["curve"][1.0] == 140.0 and c["curve"][5.0] == 131.0 and c["curve"][120.0] == 131.0
+    assert c["curve"][300.0] == 120.0  # found as the run ended, just past its limit
     text = render([c], "longrun.png")
     assert "| c | 20 | 100.00 | cells.md best bound | no | 130.00 | 30.0% |" in text
     assert "| 120.00 | these runs | 8.3% | 33.3% |" in text
