@@ -965,11 +965,7 @@ def _polish(
     from scheduler.cpsat import solve_cpsat
 
     ph = time.perf_counter()
-    hint = None
-    if best.state is None:
-        hint = stats.extra.get("worker_schedule") or stats.extra.get("exact_schedule")
-    if hint is None:
-        hint = ev.schedule(best)
+    hint = _schedule_of(ev, best, stats)
     cp = solve_cpsat(
         p, max(0.05, final - ph), seed, waits=waits, workers=opt.workers, hint=hint, callback=False
     )
@@ -977,14 +973,33 @@ def _polish(
     stats.extra["polish"] = cp.status.value
     if cp.stats.interrupted:
         stats.interrupted = True
-    if cp.schedule is not None and cp.objective < best.makespan - 1e-9:
-        stats.extra.pop("worker_schedule", None)  # _finish reads the kept schedule here
-        stats.extra["exact_schedule"] = cp.schedule
-        stats.record(time.perf_counter() - t0, cp.objective)
-        best = _solution_of(cp.schedule, cp.objective)
+    best = _keep_shorter(best, cp.schedule, cp.objective, stats, t0)
     lb = max(lb, cp.bound) if math.isfinite(cp.bound) else lb
     proven = cp.status is SolveStatus.OPTIMAL and best.makespan <= cp.objective + 1e-9
     return best, lb, proven or best.makespan <= lb + 1e-9
+
+
+def _schedule_of(ev: Evaluator, best: Solution, stats: SearchStats) -> Schedule:
+    """``best``'s schedule: the one kept beside it when it was found outside the
+    decoder (a worker's, CP-SAT's, the exact search's), else decoded."""
+    kept = None
+    if best.state is None:
+        kept = stats.extra.get("worker_schedule") or stats.extra.get("exact_schedule")
+    return kept if kept is not None else ev.schedule(best)
+
+
+def _keep_shorter(
+    best: Solution, sched: Schedule | None, makespan: float, stats: SearchStats, t0: float
+) -> Solution:
+    """``best``, or ``sched`` (found by a last phase, outside the decoder) as a
+    Solution when it is shorter: then kept where ``_finish`` reads it and recorded
+    as an improvement."""
+    if sched is None or makespan >= best.makespan - 1e-9:
+        return best
+    stats.extra.pop("worker_schedule", None)  # _finish reads the kept schedule here
+    stats.extra["exact_schedule"] = sched
+    stats.record(time.perf_counter() - t0, makespan)
+    return _solution_of(sched, makespan)
 
 
 def _exact_polish_problem(
@@ -1028,11 +1043,7 @@ def _exact_polish(
     search's where it is higher) and whether the schedule is proven
     optimal."""
     ph = time.perf_counter()
-    inc = None
-    if best.state is None:
-        inc = stats.extra.get("worker_schedule") or stats.extra.get("exact_schedule")
-    if inc is None:
-        inc = ev.schedule(best)
+    inc = _schedule_of(ev, best, stats)
     try:
         res = exact.prove(
             q, max(0.05, final - ph), None, incumbent=inc, lower=lb, waits=waits, stop=stop
@@ -1042,11 +1053,7 @@ def _exact_polish(
     stats.extra["exact_polish"] = "proven" if res.proven else res.reason
     stats.nodes += res.nodes
     stats.pruned += res.pruned
-    if res.schedule is not None and res.makespan < best.makespan - 1e-9:
-        stats.extra.pop("worker_schedule", None)  # _finish reads the kept schedule here
-        stats.extra["exact_schedule"] = res.schedule
-        stats.record(time.perf_counter() - t0, res.makespan)
-        best = _solution_of(res.schedule, res.makespan)
+    best = _keep_shorter(best, res.schedule, res.makespan, stats, t0)
     if math.isfinite(res.bound):
         lb = max(lb, min(res.bound, best.makespan))
     return best, lb, res.proven or best.makespan <= lb + 1e-9

@@ -100,12 +100,12 @@ POLISH_CHILD = textwrap.dedent(
     """
     import os, random, signal, sys, threading, time
     from scheduler import solve
-    from scheduler.families import random_routes_problem
+    from scheduler.generate import generate_problem
     from scheduler.tree import TreeOptions
 
-    p = random_routes_problem(4, 50, 5, 0, seed=2)
-    solve(p, "tree", time_limit=0.3, seed=0, waits=False)  # warm up (no polish at 0.3 s)
-    opt = TreeOptions(polish_share=0.9, polish_min_time=0.5)
+    p = generate_problem(PROBLEM)
+    solve(p, "tree", time_limit=0.3, seed=0, waits=WAITS)  # warm up (no polish at 0.3 s)
+    opt = TreeOptions(OPTIONS)
     rng = random.Random(int(sys.argv[1]))
     for delay in [rng.uniform(2.4, 3.6) for _ in range(3)]:
         before = set(threading.enumerate())
@@ -118,7 +118,7 @@ POLISH_CHILD = textwrap.dedent(
 
         timer = threading.Thread(target=kill)
         timer.start()
-        r = solve(p, "tree", time_limit=20.0, seed=0, waits=False, options=opt)
+        r = solve(p, "tree", time_limit=20.0, seed=0, waits=WAITS, options=opt)
         back = time.perf_counter()
         timer.join()
         while time.perf_counter() - back < 30.0:
@@ -128,62 +128,40 @@ POLISH_CHILD = textwrap.dedent(
             time.sleep(0.02)
         gone = time.perf_counter() - back
         print(f"solve {r.stats.interrupted} {back - sent[0]:.3f} {len(left)} {gone:.3f} "
-              f"{'polish' in r.stats.phases} {r.schedule is not None}", flush=True)
+              f"{'PHASE' in r.stats.phases} {r.schedule is not None}", flush=True)
     """
 )
 
 
+POLISHES = {
+    # CP-SAT hinted with the tree's schedule, on both workers
+    "polish": ('"routes", 4, 50, 5, 0, seed=2', "False", "polish_share=0.9, polish_min_time=0.5"),
+    # the exact branch and bound from the tree's schedule, on a problem the race and
+    # the CP-SAT polish leave alone (as a compiled cell's thousands of windows do)
+    "exact_polish": (
+        '"stations", 3, 16, 3, 1, seed=1',
+        "True",
+        "portfolio_max_windows=5, exact_polish_share=0.9, polish_min_time=0.5",
+    ),
+}
+
+
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT is POSIX")
-def test_ctrl_c_during_the_polish_ends_cpsat_and_keeps_the_best_schedule() -> None:
-    """A Ctrl-C while the polish runs (CP-SAT hinted with the tree's schedule, from 2 s
-    of a 20 s budget on here; SIGINT at seeded instants in 2.4-3.6 s) returns the tree's
-    best schedule at once, marked interrupted, with CP-SAT's threads ended."""
-    child, rows = _run_child(POLISH_CHILD, "3", 3)
+@pytest.mark.parametrize("phase", sorted(POLISHES))
+def test_ctrl_c_during_a_polish_ends_it_and_keeps_the_best_schedule(phase: str) -> None:
+    """A Ctrl-C while a polish runs (from 2 s of a 20 s budget on here; SIGINT at
+    seeded instants in 2.4-3.6 s) returns the tree's best schedule at once, marked
+    interrupted, with CP-SAT's threads ended: the CP-SAT polish, and the exact one."""
+    problem, waits, options = POLISHES[phase]
+    code = (
+        POLISH_CHILD.replace("PROBLEM", problem)
+        .replace("WAITS", waits)
+        .replace("OPTIONS", options)
+        .replace("PHASE", phase)
+    )
+    child, rows = _run_child(code, "3", 3)
     for _, interrupted, since, left, gone, polished, scheduled in rows:
         assert interrupted == "True" and polished == "True", child.stdout
         assert scheduled == "True", child.stdout
         assert float(since) < PROMPT, child.stdout
         assert int(left) == 0 and float(gone) < PROMPT, child.stdout
-
-
-EXACT_CHILD = textwrap.dedent(
-    """
-    import os, random, signal, sys, threading, time
-    from scheduler import solve
-    from scheduler.generate import generate_problem
-    from scheduler.tree import TreeOptions
-
-    p = generate_problem("stations", 3, 16, 3, 1, seed=1)
-    # no race and no CP-SAT polish (as on a compiled cell's thousands of windows)
-    opt = TreeOptions(portfolio_max_windows=5, exact_polish_share=0.9, polish_min_time=0.5)
-    solve(p, "tree", time_limit=0.3, seed=0)  # warm up (no exact polish at 0.3 s)
-    rng = random.Random(int(sys.argv[1]))
-    for delay in [rng.uniform(2.4, 3.6) for _ in range(3)]:
-        sent = []
-
-        def kill():
-            time.sleep(delay)
-            sent.append(time.perf_counter())
-            os.kill(os.getpid(), signal.SIGINT)
-
-        timer = threading.Thread(target=kill)
-        timer.start()
-        r = solve(p, "tree", time_limit=20.0, seed=0, options=opt)
-        back = time.perf_counter()
-        timer.join()
-        print(f"solve {r.stats.interrupted} {back - sent[0]:.3f} "
-              f"{'exact_polish' in r.stats.phases} {r.schedule is not None}", flush=True)
-    """
-)
-
-
-@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT is POSIX")
-def test_ctrl_c_during_the_exact_polish_keeps_the_best_schedule() -> None:
-    """A Ctrl-C while the exact polish runs (the branch and bound from the tree's
-    schedule, from 2 s of a 20 s budget on here; SIGINT at seeded instants in
-    2.4-3.6 s) returns the best schedule at once, marked interrupted."""
-    child, rows = _run_child(EXACT_CHILD, "4", 3)
-    for _, interrupted, since, polished, scheduled in rows:
-        assert interrupted == "True" and polished == "True", child.stdout
-        assert scheduled == "True", child.stdout
-        assert float(since) < PROMPT, child.stdout
