@@ -176,6 +176,7 @@ __all__ = [
     "prove",
     "relevant_borders",
     "without_idle_oracle",
+    "zone_free",
 ]
 
 _EPS = 1e-9
@@ -242,6 +243,61 @@ def without_idle_oracle(problem: Problem, max_queries: int = 1_000_000) -> Probl
     if problem.blocking is not None and oracle_binding(problem, max_queries) is False:
         return replace(problem, blocking=None)
     return problem
+
+
+def zone_free(problem: Problem) -> Problem:
+    """The problem without its zones: a relaxation whose optimum bounds the true one.
+
+    Every window, every arm's start zones and the blocking oracle are
+    dropped; arms, tasks, modes and their durations, tools, travel, releases,
+    precedence and arm availability stay. Every schedule
+    :func:`scheduler.validate` accepts for ``problem`` keeps its modes, arm
+    sequences, travel, tools and precedence, and its tasks last at least
+    their modes (waits at borders and detours only lengthen them): once each
+    task is shortened back to its mode, it is a schedule of the result no
+    longer than before. So the optimum of the result (or any lower bound of
+    it) is a lower bound of ``problem``'s. Where a plan of ``problem``
+    meets it, the plan is optimal: the S2.6 parking scene, whose best plan
+    sends an arm around a parked one and is no longer than the plan with
+    no zone at all (the tree search proves it this way).
+
+    The exact search applies to the result (:func:`applicable`) whenever
+    its setup times obey the triangle inequality.
+
+    Parameters
+    ----------
+    problem : Problem
+
+    Returns
+    -------
+    Problem
+        A new problem with the same arms, tasks and modes, named
+        ``"<name> (zone-free)"``.
+
+    Examples
+    --------
+    >>> from scheduler.generate import random_problem
+    >>> p = random_problem(2, 6, 2, 1, seed=1, blocking=True)
+    >>> q = zone_free(p)
+    >>> q.n_windows, q.blocking, q.n_tasks == p.n_tasks
+    (0, None, True)
+    >>> from scheduler import solve
+    >>> prove(q).makespan <= solve(p, "tree", time_limit=1, seed=0).objective
+    True
+    """
+    p = problem
+    none = np.zeros(0, dtype=np.int64)
+    return replace(
+        p,
+        win_mode=none,
+        win_zone=none.copy(),
+        win_start=np.zeros(0),
+        win_end=np.zeros(0),
+        win_move=np.zeros(0, dtype=bool),
+        arm_start_zones=tuple(() for _ in range(p.n_arms)),
+        blocking=None,
+        name=f"{p.name} (zone-free)",
+    )
 
 
 def applicable(problem: Problem, max_tasks: int = 12) -> tuple[bool, str]:
@@ -646,6 +702,7 @@ def prove(
     max_leaves: int = 2_000_000,
     plain_nodes: int = 100_000,
     select: bool = True,
+    stop_at_first: bool = False,
 ) -> Proof:
     """Prove the optimum by branch and bound (the exact method for compiled cells).
 
@@ -685,6 +742,10 @@ def prove(
     select : bool
         Immediate selection in the pairwise-order search (see the module
         docstring); False only to measure what it buys.
+    stop_at_first : bool
+        Stop at the first schedule shorter than ``upper`` (reason
+        ``"found"``): the search then only answers whether one exists. A
+        result with ``proven`` and no schedule says none does.
 
     Returns
     -------
@@ -723,6 +784,7 @@ def prove(
             cap_step=cap_step,
             modes=modes,
             select=select,
+            stop_at_first=stop_at_first,
         )
         first = again(
             None if time_limit is None else time_limit / 4,
@@ -851,6 +913,8 @@ def prove(
             reason[0] = "stopped"
         elif best_mk <= lower + _EPS:
             reason[0] = "met the lower bound"
+        elif stop_at_first and best_mk < upper:
+            reason[0] = "found"
         if progress is not None and now - last_report[0] >= progress_every:
             last_report[0] = now
             progress(

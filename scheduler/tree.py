@@ -27,7 +27,10 @@ sequences (:mod:`scheduler.tabu`; on a pure FJSP its compiled search on the
 disjunctive graph, which then keeps all the time after the first beam pass),
 or, with a blocking oracle, an iterated
 local search on the list (:func:`scheduler.search.local_search`). On small problems (:mod:`scheduler.exact`)
-the search finishes with an exact branch and bound that proves optimality.
+the search finishes with an exact branch and bound that proves optimality;
+where it cannot (a binding blocking oracle, an arm starting inside an
+exclusive zone), a plan that no schedule of the problem without zones beats
+is proven optimal (``TreeOptions.zone_free_share``, S2.6's parking scene).
 A schedule whose makespan meets the global lower bound is optimal at once.
 
 On problems with few enough windows (and, with setup times or as a pure
@@ -203,6 +206,23 @@ class TreeOptions:
     0: never). From the same tuning: at 30 tasks 0.3 was higher on average
     than without (one run by 1.6 s) and at 40 within the search's noise of
     1-2 s, so the rule stops between 20 and 30."""
+    zone_free_share: float = 0.1
+    """At most this share of a wall-clock budget (and ``zone_free_nodes``
+    nodes) goes to proving the tree's plans with the problem without zones
+    (:func:`scheduler.exact.zone_free`), whose optimum bounds the true one; 0:
+    never. Only on problems of at most ``exact_max_tasks`` tasks that the
+    exact search cannot prove itself (a binding blocking oracle, an arm
+    starting inside an exclusive zone). Each new best plan, between rounds
+    of the search, is first decoded without zones (its own list and modes):
+    when that, or a short list local search from it, is shorter, the
+    relaxation cannot prove it and nothing more is spent; else the exact
+    branch and bound looks for a schedule without zones shorter than the
+    plan, and where none exists the plan is optimal
+    and the tree stops (the ``parking`` cell: at once, where 10 s of search
+    and a racing CP-SAT proved nothing)."""
+    zone_free_nodes: int = 20_000
+    """The node budget of those proofs, all together (deterministic work; see
+    ``zone_free_share``)."""
     fallback: bool = True
     """When no list order decodes, ask CP-SAT (one worker) within the budget
     left (:mod:`scheduler.fallback`)."""
@@ -228,6 +248,7 @@ class TreeOptions:
             "polish_fjsp_max_tasks": 0,
             "polish_setup_max_tasks": 0,
             "exact_polish_max_tasks": 0,
+            "zone_free_nodes": 0,
         }
         for name, least in ints.items():
             v = getattr(self, name)
@@ -237,7 +258,7 @@ class TreeOptions:
             v = getattr(self, name)
             if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
                 raise UsageError(f"TreeOptions.{name} must be an int >= 1 or None, got {v!r}")
-        for name in ("polish_share", "exact_polish_share"):
+        for name in ("polish_share", "exact_polish_share", "zone_free_share"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int | float) or not (0.0 <= v < 1.0):
                 raise UsageError(f"TreeOptions.{name} must be in [0, 1), got {v!r}")
@@ -680,6 +701,13 @@ def _solve_tree(
     stop = ev.stop = _ctrl_c.StopEvent(ctrl_c)
     members: list[tuple[Any, Any]] = []  # (process, receiving end of its pipe)
     try:
+        # where no exact search can prove the problem itself (a binding oracle,
+        # an arm starting in an exclusive zone), the problem without zones may:
+        # a plan no schedule without zones beats is optimal (tried in the loop)
+        zf = _zone_free_problem(p, can_prove, opt)
+        zf_tried: Solution | None = None
+        zf_left = math.inf if time_limit is None else opt.zone_free_share * time_limit
+        zf_nodes = opt.zone_free_nodes
         if (
             time_limit is not None
             and opt.max_evaluations is None
@@ -742,6 +770,25 @@ def _solve_tree(
                 if best is not None and best.makespan <= lb + 1e-9:
                     proven = True
                     break
+                if zf is not None and best is not None and best is not zf_tried:
+                    zf_tried = best
+                    ph = time.perf_counter()
+                    verdict, nodes_used = _zone_free_proof(
+                        zf, best, lb, min(zf_left, deadline - ph), zf_nodes, stop
+                    )
+                    zf_nodes -= nodes_used
+                    zf_left -= time.perf_counter() - ph
+                    stats.nodes += nodes_used
+                    stats.phases["zone_free"] = (
+                        stats.phases.get("zone_free", 0.0) + time.perf_counter() - ph
+                    )
+                    stats.extra["zone_free"] = verdict
+                    if zf_left <= 0 or zf_nodes <= 0:
+                        zf = None  # its budget is spent
+                    if verdict == "proven":
+                        lb = max(lb, best.makespan - 1e-9)
+                        proven = True
+                        break
                 if (can_prove or cell_proof) and (time_limit is None or rounds >= 2):
                     ph = time.perf_counter()
                     nodes = opt.exact_max_nodes
@@ -1000,6 +1047,57 @@ def _keep_shorter(
     stats.extra["exact_schedule"] = sched
     stats.record(time.perf_counter() - t0, makespan)
     return _solution_of(sched, makespan)
+
+
+def _zone_free_problem(p: Problem, can_prove: bool, opt: TreeOptions) -> Problem | None:
+    """The zone-free relaxation (:func:`scheduler.exact.zone_free`) the tree
+    tries to prove its plans with (:attr:`TreeOptions.zone_free_share`), or
+    None where the rule does not hold: the exact search cannot prove ``p``
+    itself (a binding blocking oracle, an arm starting inside an exclusive
+    zone), it has zones to drop and at most ``exact_max_tasks`` tasks, and the
+    exact search applies to the relaxation (setups obeying the triangle
+    inequality)."""
+    if opt.zone_free_share <= 0.0 or opt.zone_free_nodes <= 0 or can_prove:
+        return None
+    if p.n_tasks == 0 or p.n_tasks > opt.exact_max_tasks:
+        return None
+    if p.n_windows == 0 and p.blocking is None:
+        return None  # nothing to drop: the relaxation is the problem
+    zf = exact.zone_free(p)
+    return zf if exact.applicable(zf, opt.exact_max_tasks)[0] else None
+
+
+def _zone_free_proof(
+    zf: Problem, best: Solution, lb: float, seconds: float, nodes: int, stop: Any
+) -> tuple[str, int]:
+    """Whether some schedule of the zone-free relaxation ``zf`` is shorter than
+    ``best``: ("proven", nodes) when none is (``best`` is optimal), ("shorter
+    without zones", nodes) when one is, ("stopped", nodes) when the budget
+    ran out first.
+
+    First ``best``'s own list and modes are decoded without zones, and
+    improved by the list local search (500 decodes, half the time at most):
+    when that finds a shorter one, nothing more is searched. Else the exact
+    branch and bound looks for one within the time left and ``nodes``,
+    stopping at the first."""
+    below = best.makespan - 1e-9
+    t0 = time.perf_counter()
+    zev = Evaluator(zf)
+    relaxed = zev.evaluate(best.order, best.modes)
+    if relaxed is not None and relaxed.makespan >= below:
+        # the list local search without zones, a few hundred decodes from it
+        relaxed = local_search(
+            zev, relaxed, t0 + seconds / 2, np.random.default_rng(0), lower=lb, max_evaluations=500
+        )
+    if relaxed is not None and relaxed.makespan < below:
+        return "shorter without zones", 0
+    seconds -= time.perf_counter() - t0
+    if seconds <= 0:
+        return "stopped", 0
+    res = exact.prove(zf, seconds, nodes, upper=below, lower=lb, stop=stop, stop_at_first=True)
+    if res.proven and res.schedule is None:
+        return "proven", res.nodes
+    return ("shorter without zones" if res.schedule is not None else "stopped"), res.nodes
 
 
 def _exact_polish_problem(
