@@ -206,23 +206,28 @@ class TreeOptions:
     0: never). From the same tuning: at 30 tasks 0.3 was higher on average
     than without (one run by 1.6 s) and at 40 within the search's noise of
     1-2 s, so the rule stops between 20 and 30."""
-    zone_free_share: float = 0.1
+    zone_free_share: float = 0.3
     """At most this share of a wall-clock budget (and ``zone_free_nodes``
     nodes) goes to proving the tree's plans with the problem without zones
     (:func:`scheduler.exact.zone_free`), whose optimum bounds the true one; 0:
     never. Only on problems of at most ``exact_max_tasks`` tasks that the
     exact search cannot prove itself (a binding blocking oracle, an arm
     starting inside an exclusive zone). Each new best plan, between rounds
-    of the search, is first decoded without zones (its own list and modes):
+    of the search (and the last one when a work limit, not the clock, ends
+    it), is first decoded without zones (its own list and modes):
     when that, or a short list local search from it, is shorter, the
     relaxation cannot prove it and nothing more is spent; else the exact
     branch and bound looks for a schedule without zones shorter than the
-    plan, and where none exists the plan is optimal
-    and the tree stops (the ``parking`` cell: at once, where 10 s of search
-    and a racing CP-SAT proved nothing)."""
-    zone_free_nodes: int = 20_000
+    plan, and where none exists the plan is optimal and the tree stops (the
+    ``parking`` cell: at once, where 10 s of search and a racing CP-SAT
+    proved nothing). Tuned against 0.1 and 20,000 nodes on
+    :func:`scheduler.generate.random_problem` with arms starting in their
+    zones (2x10x3x1, 2x12x4x1, 3x12x4x1, seeds 10-13, 10 s): 0.3 proved
+    one more plan optimal and ended no higher on any of the 12; the check is
+    ``bench_small``'s seeds 0-3 (docs/scheduler.md, "Solvers: options")."""
+    zone_free_nodes: int = 1_000_000
     """The node budget of those proofs, all together (deterministic work; see
-    ``zone_free_share``)."""
+    ``zone_free_share``); with a work limit at most ``10 * max_evaluations``."""
     fallback: bool = True
     """When no list order decodes, ask CP-SAT (one worker) within the budget
     left (:mod:`scheduler.fallback`)."""
@@ -708,6 +713,34 @@ def _solve_tree(
         zf_tried: Solution | None = None
         zf_left = math.inf if time_limit is None else opt.zone_free_share * time_limit
         zf_nodes = opt.zone_free_nodes
+        if opt.max_evaluations is not None:  # a work limit: in proportion to it
+            zf_nodes = min(zf_nodes, 10 * opt.max_evaluations)
+
+        def zone_free_attempt(until: float) -> bool:
+            """Try to prove a new best plan without zones, within the phase's
+            budget and ``until``; True when it is proven optimal."""
+            nonlocal zf, zf_tried, zf_left, zf_nodes, lb
+            if zf is None or best is None or best is zf_tried:
+                return False
+            zf_tried = best
+            ph = time.perf_counter()
+            verdict, nodes_used = _zone_free_proof(
+                zf, best, lb, min(zf_left, until - ph), zf_nodes, stop
+            )
+            zf_nodes -= nodes_used
+            zf_left -= time.perf_counter() - ph
+            stats.nodes += nodes_used
+            stats.phases["zone_free"] = (
+                stats.phases.get("zone_free", 0.0) + time.perf_counter() - ph
+            )
+            stats.extra["zone_free"] = verdict
+            if zf_left <= 0 or zf_nodes <= 0:
+                zf = None  # its budget is spent
+            if verdict == "proven":
+                lb = max(lb, best.makespan - 1e-9)
+                return True
+            return False
+
         if (
             time_limit is not None
             and opt.max_evaluations is None
@@ -770,25 +803,9 @@ def _solve_tree(
                 if best is not None and best.makespan <= lb + 1e-9:
                     proven = True
                     break
-                if zf is not None and best is not None and best is not zf_tried:
-                    zf_tried = best
-                    ph = time.perf_counter()
-                    verdict, nodes_used = _zone_free_proof(
-                        zf, best, lb, min(zf_left, deadline - ph), zf_nodes, stop
-                    )
-                    zf_nodes -= nodes_used
-                    zf_left -= time.perf_counter() - ph
-                    stats.nodes += nodes_used
-                    stats.phases["zone_free"] = (
-                        stats.phases.get("zone_free", 0.0) + time.perf_counter() - ph
-                    )
-                    stats.extra["zone_free"] = verdict
-                    if zf_left <= 0 or zf_nodes <= 0:
-                        zf = None  # its budget is spent
-                    if verdict == "proven":
-                        lb = max(lb, best.makespan - 1e-9)
-                        proven = True
-                        break
+                if zone_free_attempt(deadline):
+                    proven = True
+                    break
                 if (can_prove or cell_proof) and (time_limit is None or rounds >= 2):
                     ph = time.perf_counter()
                     nodes = opt.exact_max_nodes
@@ -882,6 +899,10 @@ def _solve_tree(
                     and rounds > 12
                 ):
                     break  # unlimited budget on a big problem: stop after a fair effort
+            # a work limit (or none) ends the loop with work, not time, left:
+            # the last best plan gets its attempt too
+            if not proven and time_limit is None and not stop.is_set():
+                proven = zone_free_attempt(math.inf)
         except KeyboardInterrupt:
             stats.interrupted = True  # Ctrl-C: keep the best schedule found so far
         if ctrl_c.hit:  # also when its KeyboardInterrupt was lost on the way

@@ -166,3 +166,25 @@ def test_the_rule(parking) -> None:  # type: ignore[no-untyped-def]
 def test_bad_options_name_the_field(name: str, value: object) -> None:
     with pytest.raises(UsageError, match=f"TreeOptions.{name}"):
         TreeOptions(**{name: value})  # type: ignore[arg-type]
+
+
+def test_a_plan_with_arms_starting_in_their_zones_is_proven() -> None:
+    """bench_small's kind of problem: arms start inside exclusive zones, so the
+    exact search does not apply and CP-SAT does not prove it in 2 s; the tree's
+    plan meets the optimum without zones and is proven (a work limit: repeatable)."""
+    p = random_problem(2, 10, 3, 1, seed=1, start_zones=True)
+    assert exact.applicable(p)[1] == "an arm starts inside an exclusive zone"
+    r = solve(p, "tree", time_limit=None, seed=0, options=TreeOptions(max_evaluations=2000))
+    assert r.status.value == "optimal" and r.stats.extra["zone_free"] == "proven"
+    relaxed = exact.prove(exact.zone_free(p), None, 1_000_000)
+    assert relaxed.proven and relaxed.makespan == pytest.approx(r.objective)
+
+
+def test_a_work_limit_caps_the_nodes() -> None:
+    """With a work limit the phase takes at most 10 nodes per decode of it: here
+    the branch and bound finds no shorter schedule without zones within 5,000
+    nodes and stops (with 2,000 decodes the plan is proven, above)."""
+    p = random_problem(2, 10, 3, 1, seed=1, start_zones=True)
+    r = solve(p, "tree", time_limit=None, seed=0, options=TreeOptions(max_evaluations=500))
+    assert r.stats.extra["zone_free"] == "stopped" and r.status.value == "feasible"
+    assert 5000 <= r.stats.nodes <= 10 * 500 + 100  # the phase's, and the beam's few nodes
