@@ -77,6 +77,17 @@ def test_polish_tuning_smoke(tmp_path: Path) -> None:
     assert json.loads((tmp_path / "polish_tune.json").read_text())["quick"] is True
 
 
+def test_polish_retuning_smoke(tmp_path: Path) -> None:
+    """``bench_polish --retune --quick``: every label has the polish, so the table
+    compares the shares with the reference label (0.6), not with a ``tree_off``."""
+    _run_quick("bench_polish", tmp_path, "--retune")
+    text = (tmp_path / "polish_retune.md").read_text()
+    assert "| tree_p60 | tree_p70 | tree_p80 | tree_p90 | cpsat |" in text
+    assert "- tree_p80: behind cpsat on" in text and "against tree_p60 lower on" in text
+    assert "tree_off" not in text
+    assert "`python -m benchmarks.bench_polish --retune --quick`" in text
+
+
 @pytest.mark.parametrize(
     ("flag", "name", "off"),
     [("--fjsp", "polish_fjsp_tune", "pure FJSP"), ("--setups", "polish_setup_tune", "setup times")],
