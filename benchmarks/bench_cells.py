@@ -421,6 +421,9 @@ def main(argv: list[str] | None = None) -> None:
         + _table(parts["checks"].to_dict("records"))
         + f"\n## Schedules at {', '.join(f'{t:g}' for t in limits)} s per solver (seed 0, validated)\n\n"
         + cells_table(sched)
+        + "\nThe solver's bound is its own (a proof's, where its status is optimal: the"
+        " tree proves `parking` with the problem without zones); the lower bound is"
+        " `scheduler.lower_bound` of the problem, the same for every solver.\n"
         + "\n## Exact reference and bounds (tree 10 s, CP-SAT 60 s, no-wait reference 60 s,"
         " zone-free and overlap relaxations 10 deterministic units or 60 s each, exact"
         " branch and bound 600 s or 5,000,000 nodes; seed 0, 2 CP-SAT workers)\n\n"

@@ -308,14 +308,26 @@ def cells_table(df: Any, solvers: Sequence[str] = ("greedy", "tree", "cpsat")) -
     Returns
     -------
     str
-        Markdown: per cell and solver the status, makespan, lower bound and time.
+        Markdown: per cell and solver the status, makespan, the solver's own
+        bound (``bound``, where the results have it: the tree's is its proof's
+        when it proves its plan, e.g. with the problem without zones), the
+        problem's :func:`scheduler.lower_bound` and the time.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> df = pd.DataFrame({"instance": ["parking"], "label": ["tree"], "status": ["optimal"],
+    ...     "makespan": [19.3215], "bound": [19.3215], "lower_bound": [18.2295],
+    ...     "runtime": [0.1]})
+    >>> print(cells_table(df).splitlines()[2])
+    | parking | tree | optimal | 19.3 | 19.32 | 18.2 | 0.1 |
     """
     need_columns(
         df, ["instance", "label", "status", "makespan", "lower_bound", "runtime"], "cells_table"
     )
     lines = [
-        "| cell | solver | status | makespan (s) | lower bound (s) | time (s) |",
-        "|---|---|---|---|---|---|",
+        "| cell | solver | status | makespan (s) | solver's bound (s) | lower bound (s) | time (s) |",
+        "|---|---|---|---|---|---|---|",
     ]
     rank = {s: i for i, s in enumerate(solvers)}
     order = sorted(
@@ -328,8 +340,10 @@ def cells_table(df: Any, solvers: Sequence[str] = ("greedy", "tree", "cpsat")) -
         ),
     )
     for _, r in df.loc[order].iterrows():
+        own = float(r["bound"]) if "bound" in r.index else math.nan
         lines.append(
             f"| {r['instance']} | {r['label']} | {r['status']} | {_fmt(float(r['makespan']), '.1f')} "
+            f"| {_fmt(own, '.2f') if own > 0 else '-'} "
             f"| {float(r['lower_bound']):.1f} | {float(r['runtime']):.1f} |"
         )
     return "\n".join(lines) + "\n"
