@@ -8,6 +8,8 @@ randomness and more examples.
 from __future__ import annotations
 
 import os
+import signal
+from collections.abc import Iterator
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -22,6 +24,28 @@ settings.register_profile(
 )
 settings.register_profile("explore", deadline=None, max_examples=1000)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _ctrl_c_raises() -> Iterator[None]:
+    """Ctrl-C means KeyboardInterrupt here, however the test run was started.
+
+    The Ctrl-C tests send SIGINT to their own process (or to a command they
+    start) and expect Python's KeyboardInterrupt. A process started in the
+    background of a non-interactive shell (``make test &``, ``nohup``)
+    inherits SIGINT *ignored*, and Python then installs no handler, so those
+    tests failed only because of how the run was launched (13 of them under
+    ``signal.SIG_IGN``). The default handler is put back for the session,
+    which also gives the commands a test starts the default disposition.
+    """
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        yield
+        return
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 @pytest.fixture(scope="session")

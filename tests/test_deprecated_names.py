@@ -45,3 +45,27 @@ def test_the_new_names_do_not_warn() -> None:
 
         p = random_problem(2, 4, 1, 0, seed=1)
         assert compile_problem(p).n_tasks == p.n_tasks and callable(zone_windows)
+
+
+def test_the_package_itself_uses_no_moved_module_path() -> None:
+    """The command line's medium check once imported ``workcell.sim.network``, a
+    path kept only for users' old code, so every ``--network`` run warned about
+    the package's own import. In a fresh interpreter (no module cached), the
+    check and the simulation's entry points raise no "moved to" warning."""
+    import subprocess
+    import sys
+
+    code = (
+        "import warnings\n"
+        "warnings.simplefilter('always')\n"
+        "with warnings.catch_warnings(record=True) as got:\n"
+        "    warnings.simplefilter('always')\n"
+        "    from workcell.cli.args import check_network\n"
+        "    check_network('ideal')\n"
+        "    import workcell.cli, workcell.sim.comms, workcell.sim.harness\n"
+        "print([str(w.message) for w in got if 'moved to' in str(w.message)])\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert out.stdout.strip() == "[]", out.stdout

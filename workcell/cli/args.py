@@ -109,11 +109,10 @@ def check_count(option: str, value: int | None, least: int, most: int) -> None:
 
 def check_network(name: str) -> None:
     """``--network`` names a known medium."""
-    from workcell.sim import network
+    from workcell.sim.comms import MEDIA
 
-    media: tuple[str, ...] = getattr(network, "MEDIA", ("ideal", "fixed"))
-    if name not in media:
-        raise UsageError(f"--network: unknown medium {name!r} (known: {', '.join(media)})")
+    if name not in MEDIA:
+        raise UsageError(f"--network: unknown medium {name!r} (known: {', '.join(MEDIA)})")
 
 
 def check_sim(args: argparse.Namespace) -> None:
