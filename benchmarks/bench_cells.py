@@ -31,9 +31,16 @@ measuring its whole comparison in one run) and ``benchmarks/sweeps/cells.toml``
    5,000,000 nodes, from the tree's plan), the best lower bound, which bound
    it is, whether anything is proven, and the gaps to it; the tree plan's busiest arm, its waits and its
    busiest resource (:func:`plan_loads`) say where a plan's time goes.
+6. The space grid (:func:`grid_section`): the table of
+   :mod:`benchmarks.bench_grid` (block size against compile time, zones,
+   windows, makespan and the exact re-timing), read from its recorded runs
+   with their own provenance line; ``bench_grid`` measures it (it takes
+   long on ``cell8``'s exact re-timings, so this script does not run it).
 
 The schedule sweep resumes where a previous run stopped (``--fresh`` runs it
-again); the speed measurements are always taken again.
+again); the speed measurements are always taken again, unless ``--render``:
+then every recorded run is kept (only a run missing from the results files
+is run) and the tables are written again from them.
 """
 
 from __future__ import annotations
@@ -42,11 +49,12 @@ import argparse
 import math
 import time
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from benchmarks.common import output_dir, publish, run_table_sweep, sweep_arguments
+from benchmarks.common import RESULTS, SWEEPS, output_dir, publish, run_table_sweep, sweep_arguments
 from workcell import compile_cell, load_example
 from workcell.oracle import CellOracle
 
@@ -376,6 +384,66 @@ def _cell(x: Any) -> str:
     return "nan" if isinstance(x, float) and math.isnan(x) else str(x)
 
 
+def grid_section(out: Path) -> str:
+    """The space-grid table of :mod:`benchmarks.bench_grid`, from its recorded runs.
+
+    The runs of the current ``benchmarks/sweeps/grid.toml`` are read from
+    ``out`` (a quick run's directory) or else from the published results,
+    and rendered with :func:`benchmarks.bench_grid.table` under a second-level
+    heading, followed by their own provenance line (when and where they ran:
+    not this script's run).
+
+    Parameters
+    ----------
+    out : Path
+        The results directory of this run.
+
+    Returns
+    -------
+    str
+        Markdown; a line saying how to measure it when nothing is recorded.
+    """
+    import pandas as pd
+
+    from benchmarks import bench_grid
+    from workcell.experiments import load_sweep
+    from workcell.experiments.analysis import measurements, sweep_note
+
+    sweep = load_sweep(SWEEPS / "grid.toml")
+    found = None
+    for where in dict.fromkeys([out, RESULTS]):
+        path = where / "grid.parquet"
+        if not path.is_file():
+            continue
+        rows = pd.read_parquet(path)
+        rows = rows[rows["status"] != "error"]
+        # the published sweep's runs first, else a quick run's (a smoke run's directory)
+        for quick, spec in ((False, sweep), (True, sweep.quick_version())):
+            keys = {r.key for r in spec.runs()}
+            df = rows[rows["key"].isin(keys)].reset_index(drop=True)
+            if len(df):
+                found = (df, quick)
+                break
+        if found is not None:
+            break
+    if found is None:
+        return (
+            "\n## The space grid\n\nNo grid measurements are recorded: "
+            "`python -m benchmarks.bench_grid` measures them.\n"
+        )
+    df, quick = found
+    body = bench_grid.table(measurements(df))
+    body = body.replace("# The space grid", "## The space grid", 1)
+    command = "python -m benchmarks.bench_grid" + (" --quick" if quick else "")
+    note = sweep_note(df, sweep_file="benchmarks/sweeps/grid.toml", command=command)
+    return (
+        "\n"
+        + body
+        + "\nMeasured by `bench_grid`, not by this script's run; its provenance:\n\n"
+        + note
+    )
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run both sweeps and write the tables.
 
@@ -390,22 +458,21 @@ def main(argv: list[str] | None = None) -> None:
 
     ap = argparse.ArgumentParser(description=__doc__)
     sweep_arguments(ap)
+    ap.add_argument(
+        "--render",
+        action="store_true",
+        help="keep every recorded run (speed and reference too) and write the tables"
+        " again from them; only runs missing from the results files are run",
+    )
     args = ap.parse_args(argv)
+    if args.render and args.fresh:
+        raise SystemExit("bench_cells: --render keeps the recorded runs; --fresh discards them")
     out = output_dir(args.quick)
-    # the speed measurements are always taken again, side by side in this run
-    speed = run_table_sweep(
-        "cells",
-        argparse.Namespace(**{**vars(args), "fresh": True}),
-        out,
-        sweep_file="cells_compile",
-    )
+    # the speed measurements are taken again, side by side in this run (not with --render)
+    again = argparse.Namespace(**{**vars(args), "fresh": not args.render})
+    speed = run_table_sweep("cells", again, out, sweep_file="cells_compile")
     sched = run_table_sweep("cells", args, out)
-    refs = run_table_sweep(
-        "cells",
-        argparse.Namespace(**{**vars(args), "fresh": True}),
-        out,
-        sweep_file="cells_reference",
-    )
+    refs = run_table_sweep("cells", again, out, sweep_file="cells_reference")
     head = ["family", "instance", "seed", "repetition", "load_average"]
     parts = {f: measurements(speed, f).drop(columns=head) for f in ("compile", "detours", "checks")}
     parts["reference"] = measurements(refs, "reference").drop(columns=head)
@@ -458,6 +525,7 @@ def main(argv: list[str] | None = None) -> None:
         " the optimum of the true problem (proven? then says yes and proof time is its"
         " wall time); exact nodes is its deterministic work; bound source 'exact': the"
         " proven optimum. tree above exact: the tree's 10 s plan against that optimum.\n"
+        + grid_section(out)
     )
     both = pd.concat([speed, sched, refs], ignore_index=True)
     path = publish(
@@ -473,6 +541,9 @@ def main(argv: list[str] | None = None) -> None:
             "detours": parts["detours"].to_dict("records"),
             "checks": parts["checks"].to_dict("records"),
             "reference": parts["reference"].to_dict("records"),
+            # --render: the tables were written again from recorded runs; the
+            # machine block above is the render's, the runs' own is in their note
+            "rendered_from_recorded_runs": bool(args.render),
         },
         rows=sched.drop(columns=["dependencies"]),
     )

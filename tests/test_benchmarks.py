@@ -44,7 +44,6 @@ def _run_quick(script: str, out: Path, *flags: str) -> None:
         "bench_resolve_loop",
         "bench_geometry",
         "bench_oracle",
-        "bench_cells",
         "bench_sim",
         "bench_simkernel",
         "bench_network",
@@ -65,6 +64,60 @@ def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
     data = json.loads(out[0].read_text())
     assert "machine" in data and ("seed" in data or "seeds" in data)
     assert (tmp_path / out[0].with_suffix(".md").name).is_file()
+
+
+def test_cells_smoke_and_render(tmp_path: Path) -> None:
+    """``bench_cells --quick``, then ``--render --quick`` in the same directory: the
+    render runs nothing (every run is recorded), writes the same schedule rows,
+    and says where the grid table comes from (none recorded here)."""
+    _run_quick("bench_cells", tmp_path)
+    first = json.loads((tmp_path / "cells.json").read_text())
+    assert "machine" in first and "seeds" in first
+    assert first["rendered_from_recorded_runs"] is False
+    proc = subprocess.run(
+        [sys.executable, "-m", "benchmarks.bench_cells", "--render", "--quick"],
+        cwd=ROOT,
+        env={**os.environ, "MULTIARM_RESULTS": str(tmp_path)},
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.count(" 0 runs now, ") == 3, proc.stdout
+    again = json.loads((tmp_path / "cells.json").read_text())
+    assert again["rendered_from_recorded_runs"] is True
+    assert again["rows"] == first["rows"]
+    text = (tmp_path / "cells.md").read_text()
+    assert "## The space grid" in text
+    assert "No grid measurements are recorded: `python -m benchmarks.bench_grid`" in text
+
+
+def test_cells_render_refuses_fresh() -> None:
+    from benchmarks import bench_cells
+
+    with pytest.raises(SystemExit, match="--render keeps the recorded runs"):
+        bench_cells.main(["--render", "--fresh", "--quick"])
+
+
+def test_cells_grid_section_reads_the_recorded_grid(tmp_path: Path) -> None:
+    """The grid table in ``cells.md`` comes from ``bench_grid``'s recorded runs (here
+    the published ones), under a second-level heading, with their own provenance."""
+    import shutil
+
+    from benchmarks.bench_cells import grid_section
+
+    shutil.copy(ROOT / "benchmarks" / "results" / "grid.parquet", tmp_path / "grid.parquet")
+    text = grid_section(tmp_path)
+    assert text.count("## The space grid: block size against compile time") == 1
+    assert "\n# " not in text
+    assert "| cell | grid (m) | compile (s) | zones (grid) |" in text
+    for cell in ("supersigma", "scara4", "cell8"):
+        assert f"| {cell} | 0.3 |" in text
+    assert "Measured by `bench_grid`, not by this script's run" in text
+    assert (
+        "Reproduce: `python -m benchmarks.bench_grid` (sweep `benchmarks/sweeps/grid.toml`)" in text
+    )
 
 
 def test_polish_tuning_smoke(tmp_path: Path) -> None:
