@@ -15,9 +15,13 @@ sweep (resuming; ``--fresh`` to start over) into
 ``outside.md`` and ``outside.json``. ``--tune`` runs the tuning sweep
 ``benchmarks/sweeps/outside_tune.toml`` instead (the ``routes`` problems,
 the tree with and without the race beside CP-SAT) and writes
-:func:`tune_table` to ``outside_tune.md``.
+:func:`tune_table` to ``outside_tune.md``. ``--seeds`` runs
+``benchmarks/sweeps/outside_seeds.toml`` (the table's ``routes`` problems,
+both solvers with solver seeds 0-2) and writes :func:`seed_table` to
+``outside_seeds.md``: whether a difference of one run is more than the
+run-to-run spread.
 
-Run: ``python -m benchmarks.bench_outside [--fresh] [--workers N] [--quick] [--tune]``.
+Run: ``python -m benchmarks.bench_outside [--fresh] [--workers N] [--quick] [--tune | --seeds]``.
 """
 
 from __future__ import annotations
@@ -130,6 +134,98 @@ def outside_table(df: Any, *, sweep: str = NAME, tree: str = "tree", cpsat: str 
     return "\n".join(lines) + "\n"
 
 
+def seed_table(df: Any, *, tree: str = "tree", cpsat: str = "cpsat") -> str:
+    """The table of ``benchmarks/results/outside_seeds.md`` (``sweeps/outside_seeds.toml``).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Results with one run per (instance, solver label, seed).
+    tree, cpsat : str
+        The two solver labels compared.
+
+    Returns
+    -------
+    str
+        Markdown: per problem each seed's makespan of both solvers, their means
+        and ranges and the difference of the means; then how often the tree is
+        behind with each seed, behind on the mean, and behind beyond the spread
+        (its best seed longer than CP-SAT's worst).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> rows = [("p", "tree", 0, 10.0), ("p", "tree", 1, 12.0), ("p", "cpsat", 0, 11.0),
+    ...         ("p", "cpsat", 1, 11.0), ("q", "tree", 0, 9.0), ("q", "tree", 1, 9.0),
+    ...         ("q", "cpsat", 0, 8.0), ("q", "cpsat", 1, 8.0)]
+    >>> df = pd.DataFrame(rows, columns=["instance", "label", "seed", "makespan"])
+    >>> df = df.assign(family="routes", time_limit=1.0,
+    ...                instance_params='{"tasks": 5}')
+    >>> print(seed_table(df).splitlines()[-1])
+    - behind on the mean: 1 of 2 (by 12.50% at most); beyond the spread (the tree's best seed longer than cpsat's worst): 1 of 2
+    """
+    limit = float(df["time_limit"].max())
+    seeds = sorted({int(v) for v in df["seed"].dropna()})
+    stxt = (
+        f"{seeds[0]}-{seeds[-1]}"
+        if seeds == list(range(seeds[0], seeds[-1] + 1))
+        else (", ".join(map(str, seeds)))
+    )
+    mk: dict[tuple[str, str, int], float] = {}
+    tasks: dict[str, int] = {}
+    for r in df.itertuples(index=False):
+        mk[(str(r.label), str(r.instance), int(r.seed))] = float(r.makespan)
+        tasks[str(r.instance)] = int(json.loads(str(r.instance_params))["tasks"])
+    keys = sorted(tasks, key=lambda k: (tasks[k], k))
+    family = ", ".join(sorted({str(f) for f in df["family"]}))
+    lines = [
+        f"# The outside table's {family} problems over solver seeds: {tree} vs {cpsat}",
+        "",
+        f"{limit:g} s per solver, problem and seed, both on the machine's 2 cores (sweep "
+        "`benchmarks/sweeps/outside_seeds.toml`); solver seeds "
+        f"{stxt}. The outside table runs each solver once per problem (its seed the "
+        "problem's); here each runs once per seed, so a difference can be told from the "
+        "run-to-run spread. Makespans validated; '-nowait': solved with `waits=False`.",
+        "",
+        f"| problem | {tree}: seeds {stxt} | {tree} mean (min-max) | {cpsat}: seeds {stxt} "
+        f"| {cpsat} mean (min-max) | mean difference |",
+        "|---|---|---|---|---|---|",
+    ]
+    per_seed = dict.fromkeys(seeds, 0)
+    behind_mean = beyond = 0
+    worst = 0.0
+    for k in keys:
+        got = {x: [mk.get((x, k, s), math.nan) for s in seeds] for x in (tree, cpsat)}
+        for s, a, b in zip(seeds, got[tree], got[cpsat], strict=True):
+            per_seed[s] += a > b + 1e-9
+        ma = sum(got[tree]) / len(seeds)
+        mb = sum(got[cpsat]) / len(seeds)
+        diff = (ma - mb) / mb if mb > 0 else math.nan
+        if ma > mb + 1e-9:
+            behind_mean += 1
+            worst = max(worst, diff)
+        if min(got[tree]) > max(got[cpsat]) + 1e-9:
+            beyond += 1
+        cells = [
+            " ".join(_fmt(v) for v in got[x])
+            + f" | {sum(got[x]) / len(seeds):.1f} ({_fmt(min(got[x]))}-{_fmt(max(got[x]))})"
+            for x in (tree, cpsat)
+        ]
+        dtxt = f"{100 * diff:+.2f}%" if math.isfinite(diff) else "-"
+        lines.append(f"| {k} | " + " | ".join(cells) + f" | {dtxt} |")
+    n = len(keys)
+    lines += [
+        "",
+        f"- {tree} behind {cpsat} with the same seed: "
+        + ", ".join(f"seed {s} on {per_seed[s]} of {n}" for s in seeds),
+        f"- behind on the mean: {behind_mean} of {n}"
+        + (f" (by {100 * worst:.2f}% at most)" if behind_mean else "")
+        + f"; beyond the spread (the {tree}'s best seed longer than {cpsat}'s worst): {beyond} of {n}",
+        "",
+    ]
+    return "\n".join(lines)
+
+
 def tune_table(df: Any, *, limit: int = 40) -> str:
     """The table of ``benchmarks/results/outside_tune.md`` (``sweeps/outside_tune.toml``).
 
@@ -202,13 +298,33 @@ def main(argv: list[str] | None = None) -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     sweep_arguments(ap)
-    ap.add_argument(
+    which = ap.add_mutually_exclusive_group()
+    which.add_argument(
         "--tune",
         action="store_true",
         help="run the tuning sweep outside_tune.toml instead (writes outside_tune.md)",
     )
+    which.add_argument(
+        "--seeds",
+        action="store_true",
+        help="run outside_seeds.toml instead: the routes problems with solver seeds 0-2"
+        " (writes outside_seeds.md)",
+    )
     args = ap.parse_args(argv)
     out = output_dir(args.quick)
+    if args.seeds:
+        df = run_table_sweep("outside_seeds", args, out)
+        path = publish(
+            "outside_seeds",
+            df,
+            seed_table(df),
+            out,
+            quick=args.quick,
+            flags="--seeds --fresh",
+            script="bench_outside",
+        )
+        print(path.read_text())
+        return
     if args.tune:
         from workcell.experiments.analysis import sweep_note
 

@@ -120,6 +120,60 @@ def test_cells_grid_section_reads_the_recorded_grid(tmp_path: Path) -> None:
     )
 
 
+def test_outside_seeds_smoke(tmp_path: Path) -> None:
+    """``bench_outside --seeds --quick``: both solvers with solver seeds 0-2, the
+    per-seed and on-the-mean counts, and a note whose command reruns this sweep."""
+    _run_quick("bench_outside", tmp_path, "--seeds")
+    text = (tmp_path / "outside_seeds.md").read_text()
+    assert "| problem | tree: seeds 0-2 | tree mean (min-max) | cpsat: seeds 0-2 |" in text
+    assert "- tree behind cpsat with the same seed: seed 0 on " in text
+    assert "beyond the spread (the tree's best seed longer than cpsat's worst): " in text
+    assert "`python -m benchmarks.bench_outside --seeds --quick`" in text
+    data = json.loads((tmp_path / "outside_seeds.json").read_text())
+    assert data["seeds"] == [0, 1, 2] and len(data["rows"]) == 6
+
+
+def test_outside_seed_table_counts() -> None:
+    """The seed table tells a difference of one seed from one beyond the spread."""
+    import pandas as pd
+
+    from benchmarks.bench_outside import seed_table
+
+    rows = [
+        # p: the tree behind with seed 1 only, equal on the mean
+        ("p", "tree", 0, 10.0),
+        ("p", "tree", 1, 12.0),
+        ("p", "cpsat", 0, 11.0),
+        ("p", "cpsat", 1, 11.0),
+        # q: behind with every seed, beyond the spread
+        ("q", "tree", 0, 9.0),
+        ("q", "tree", 1, 9.0),
+        ("q", "cpsat", 0, 8.0),
+        ("q", "cpsat", 1, 8.0),
+        # r: ahead on the mean, behind with seed 0
+        ("r", "tree", 0, 21.0),
+        ("r", "tree", 1, 18.0),
+        ("r", "cpsat", 0, 20.0),
+        ("r", "cpsat", 1, 20.0),
+    ]
+    df = pd.DataFrame(rows, columns=["instance", "label", "seed", "makespan"]).assign(
+        family="routes", time_limit=1.0, instance_params='{"tasks": 5}'
+    )
+    text = seed_table(df)
+    assert "| q | 9 9 | 9.0 (9-9) | 8 8 | 8.0 (8-8) | +12.50% |" in text
+    assert "| r | 21 18 | 19.5 (18-21) | 20 20 | 20.0 (20-20) | -2.50% |" in text
+    assert "- tree behind cpsat with the same seed: seed 0 on 2 of 3, seed 1 on 2 of 3" in text
+    assert "- behind on the mean: 1 of 3 (by 12.50% at most);" in text
+    assert "longer than cpsat's worst): 1 of 3" in text
+
+
+def test_outside_sweeps_are_exclusive() -> None:
+    from benchmarks import bench_outside
+
+    with pytest.raises(SystemExit):
+        bench_outside.main(["--tune", "--seeds", "--quick"])
+
+
 def test_polish_tuning_smoke(tmp_path: Path) -> None:
     """``bench_polish --tune --quick``: the tuning sweep's table, with its four tree
     labels and CP-SAT, and a note whose command reruns the tuning sweep."""
