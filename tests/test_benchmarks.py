@@ -13,8 +13,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _run_quick(script: str, out: Path, *flags: str) -> None:
-    """``python -m benchmarks.<script> <flags> --quick`` writing into ``out``; it must succeed."""
+def _run_quick(script: str, out: Path, *flags: str) -> subprocess.CompletedProcess[str]:
+    """``python -m benchmarks.<script> <flags> --quick`` writing into ``out``; it must
+    succeed (returned, for its output)."""
     proc = subprocess.run(
         [sys.executable, "-m", f"benchmarks.{script}", *flags, "--quick"],
         cwd=ROOT,
@@ -25,6 +26,7 @@ def _run_quick(script: str, out: Path, *flags: str) -> None:
         timeout=300,
     )
     assert proc.returncode == 0, proc.stderr
+    return proc
 
 
 @pytest.mark.parametrize(
@@ -74,16 +76,7 @@ def test_cells_smoke_and_render(tmp_path: Path) -> None:
     first = json.loads((tmp_path / "cells.json").read_text())
     assert "machine" in first and "seeds" in first
     assert first["rendered_from_recorded_runs"] is False
-    proc = subprocess.run(
-        [sys.executable, "-m", "benchmarks.bench_cells", "--render", "--quick"],
-        cwd=ROOT,
-        env={**os.environ, "MULTIARM_RESULTS": str(tmp_path)},
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=300,
-    )
-    assert proc.returncode == 0, proc.stderr
+    proc = _run_quick("bench_cells", tmp_path, "--render")
     assert proc.stdout.count(" 0 runs now, ") == 3, proc.stdout
     again = json.loads((tmp_path / "cells.json").read_text())
     assert again["rendered_from_recorded_runs"] is True
@@ -139,22 +132,16 @@ def test_outside_seed_table_counts() -> None:
 
     from benchmarks.bench_outside import seed_table
 
+    runs = {  # per problem: the tree's and CP-SAT's makespans with seeds 0 and 1
+        "p": ((10.0, 12.0), (11.0, 11.0)),  # behind with seed 1 only, equal on the mean
+        "q": ((9.0, 9.0), (8.0, 8.0)),  # behind with every seed, beyond the spread
+        "r": ((21.0, 18.0), (20.0, 20.0)),  # ahead on the mean, behind with seed 0
+    }
     rows = [
-        # p: the tree behind with seed 1 only, equal on the mean
-        ("p", "tree", 0, 10.0),
-        ("p", "tree", 1, 12.0),
-        ("p", "cpsat", 0, 11.0),
-        ("p", "cpsat", 1, 11.0),
-        # q: behind with every seed, beyond the spread
-        ("q", "tree", 0, 9.0),
-        ("q", "tree", 1, 9.0),
-        ("q", "cpsat", 0, 8.0),
-        ("q", "cpsat", 1, 8.0),
-        # r: ahead on the mean, behind with seed 0
-        ("r", "tree", 0, 21.0),
-        ("r", "tree", 1, 18.0),
-        ("r", "cpsat", 0, 20.0),
-        ("r", "cpsat", 1, 20.0),
+        (name, label, seed, mk[seed])
+        for name, both in runs.items()
+        for label, mk in zip(("tree", "cpsat"), both, strict=True)
+        for seed in (0, 1)
     ]
     df = pd.DataFrame(rows, columns=["instance", "label", "seed", "makespan"]).assign(
         family="routes", time_limit=1.0, instance_params='{"tasks": 5}'
