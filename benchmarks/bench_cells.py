@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -433,7 +434,7 @@ def grid_section(out: Path) -> str:
         )
     df, quick = found
     body = bench_grid.table(measurements(df))
-    body = body.replace("# The space grid", "## The space grid", 1)
+    body = re.sub(r"^(#+) ", r"#\1 ", body, flags=re.MULTILINE)  # every heading one level down
     command = "python -m benchmarks.bench_grid" + (" --quick" if quick else "")
     note = sweep_note(df, sweep_file="benchmarks/sweeps/grid.toml", command=command)
     return (

@@ -40,6 +40,15 @@ def _fmt(x: float) -> str:
     return f"{x:g}" if math.isfinite(x) else "none"
 
 
+def _fmt_mean(x: float) -> str:
+    return f"{x:.1f}" if math.isfinite(x) else "none"
+
+
+def _or_inf(x: float) -> float:
+    """A makespan, or infinity for a run without a schedule (nan)."""
+    return x if math.isfinite(x) else math.inf
+
+
 def outside_table(df: Any, *, sweep: str = NAME, tree: str = "tree", cpsat: str = "cpsat") -> str:
     """The Markdown table of ``benchmarks/results/outside.md`` from the sweep's results.
 
@@ -194,21 +203,25 @@ def seed_table(df: Any, *, tree: str = "tree", cpsat: str = "cpsat") -> str:
     per_seed = dict.fromkeys(seeds, 0)
     behind_mean = beyond = 0
     worst = 0.0
+    missing = {tree: 0, cpsat: 0}
     for k in keys:
-        got = {x: [mk.get((x, k, s), math.nan) for s in seeds] for x in (tree, cpsat)}
+        # a run without a schedule (or not run) counts as longer than any schedule
+        got = {x: [_or_inf(mk.get((x, k, s), math.nan)) for s in seeds] for x in (tree, cpsat)}
+        for x in (tree, cpsat):
+            missing[x] += sum(math.isinf(v) for v in got[x])
         for s, a, b in zip(seeds, got[tree], got[cpsat], strict=True):
             per_seed[s] += a > b + 1e-9
         ma = sum(got[tree]) / len(seeds)
         mb = sum(got[cpsat]) / len(seeds)
-        diff = (ma - mb) / mb if mb > 0 else math.nan
+        diff = (ma - mb) / mb if math.isfinite(ma) and math.isfinite(mb) and mb > 0 else math.nan
         if ma > mb + 1e-9:
             behind_mean += 1
-            worst = max(worst, diff)
+            worst = max(worst, diff) if math.isfinite(diff) else worst
         if min(got[tree]) > max(got[cpsat]) + 1e-9:
             beyond += 1
         cells = [
             " ".join(_fmt(v) for v in got[x])
-            + f" | {sum(got[x]) / len(seeds):.1f} ({_fmt(min(got[x]))}-{_fmt(max(got[x]))})"
+            + f" | {_fmt_mean(sum(got[x]) / len(seeds))} ({_fmt(min(got[x]))}-{_fmt(max(got[x]))})"
             for x in (tree, cpsat)
         ]
         dtxt = f"{100 * diff:+.2f}%" if math.isfinite(diff) else "-"
@@ -221,8 +234,14 @@ def seed_table(df: Any, *, tree: str = "tree", cpsat: str = "cpsat") -> str:
         f"- behind on the mean: {behind_mean} of {n}"
         + (f" (by {100 * worst:.2f}% at most)" if behind_mean else "")
         + f"; beyond the spread (the {tree}'s best seed longer than {cpsat}'s worst): {beyond} of {n}",
-        "",
     ]
+    if any(missing.values()):
+        lines.append(
+            "- runs without a schedule ('none', counted as longer than any schedule; a "
+            "mean over them is 'none'): "
+            + ", ".join(f"{x} {missing[x]} of {n * len(seeds)}" for x in (tree, cpsat))
+        )
+    lines.append("")
     return "\n".join(lines)
 
 

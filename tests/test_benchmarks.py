@@ -105,6 +105,9 @@ def test_cells_grid_section_reads_the_recorded_grid(tmp_path: Path) -> None:
     assert text.count("## The space grid: block size against compile time") == 1
     assert "\n# " not in text
     assert "| cell | grid (m) | compile (s) | zones (grid) |" in text
+    # the plans at the issue's 10 s beside the work-limited ones, one heading level down
+    assert "\n### The tree at 10 s\n" in text and "The price of the grid at 10 s" in text
+    assert "| cell | grid (m) | windows | makespan (s) | x 0.3 | work-limited (s) |" in text
     for cell in ("supersigma", "scara4", "cell8"):
         assert f"| {cell} | 0.3 |" in text
     assert "Measured by `bench_grid`, not by this script's run" in text
@@ -152,6 +155,37 @@ def test_outside_seed_table_counts() -> None:
     assert "- tree behind cpsat with the same seed: seed 0 on 2 of 3, seed 1 on 2 of 3" in text
     assert "- behind on the mean: 1 of 3 (by 12.50% at most);" in text
     assert "longer than cpsat's worst): 1 of 3" in text
+
+
+def test_outside_seed_table_counts_a_run_without_a_schedule_as_longest() -> None:
+    """A run without a schedule (nan) is longer than any schedule: it is behind with
+    its seed, its mean is 'none' and behind any finite mean, and it is counted."""
+    import pandas as pd
+
+    from benchmarks.bench_outside import seed_table
+
+    nan = float("nan")
+    runs = {
+        "a": ((30.0, 31.0), (nan, 32.0)),  # CP-SAT without a schedule with seed 0
+        "b": ((nan, nan), (nan, 40.0)),  # the tree never, CP-SAT once
+        "c": ((nan, nan), (nan, nan)),  # neither: nobody is behind
+    }
+    rows = [
+        (name, label, seed, mk[seed])
+        for name, both in runs.items()
+        for label, mk in zip(("tree", "cpsat"), both, strict=True)
+        for seed in (0, 1)
+    ]
+    df = pd.DataFrame(rows, columns=["instance", "label", "seed", "makespan"]).assign(
+        family="stations", time_limit=1.0, instance_params='{"tasks": 5}'
+    )
+    text = seed_table(df)
+    assert "| a | 30 31 | 30.5 (30-31) | none 32 | none (32-none) | - |" in text
+    assert "| b | none none | none (none-none) | none 40 | none (40-none) | - |" in text
+    assert "- tree behind cpsat with the same seed: seed 0 on 0 of 3, seed 1 on 1 of 3" in text
+    assert "- behind on the mean: 0 of 3;" in text
+    assert "longer than cpsat's worst): 0 of 3" in text
+    assert "runs without a schedule ('none'" in text and "tree 4 of 6, cpsat 4 of 6" in text
 
 
 def test_outside_sweeps_are_exclusive() -> None:
