@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +47,50 @@ def _gids(fig: object, prefix: str) -> list[str]:
     return [p.get_gid() for p in ax.patches if (p.get_gid() or "").startswith(prefix)]
 
 
+def _union(spans: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """The disjoint intervals covering ``spans`` (touching ones joined)."""
+    out: list[list[float]] = []
+    for a, b in sorted(spans):
+        if out and a <= out[-1][1]:
+            out[-1][1] = max(out[-1][1], b)
+        else:
+            out.append([a, b])
+    return [(a, b) for a, b in out]
+
+
+def _check_zone_bars(fig: object, res: Sequence[Any], suffix: str = "") -> None:
+    """The zone bars of ``fig`` (gids ending with ``suffix``) stand for the
+    reservations ``res``: one bar per reservation of an SDL zone, and in the
+    space-grid lane, per task, bars that cover exactly the union of the task's
+    block reservations (one bar per disjoint stretch)."""
+    ax = fig.axes[0]  # type: ignore[attr-defined]
+    res = [r for r in res if r.end > r.start and r.kind != "tool"]
+    bars = [
+        b
+        for b in ax.patches
+        if (b.get_gid() or "").startswith("zone:") and b.get_gid().endswith(suffix)
+    ]
+    sdl = [r for r in res if not r.resource.startswith("grid_")]
+    assert sum(not b.get_gid().startswith("zone:space grid:") for b in bars) == len(sdl)
+    want: dict[str, list[tuple[float, float]]] = {}
+    for r in res:
+        if r.resource.startswith("grid_"):
+            want.setdefault(f"zone:space grid:{r.task or 'start'}{suffix}", []).append(
+                (float(r.start), float(r.end))
+            )
+    got: dict[str, list[tuple[float, float]]] = {}
+    for b in bars:
+        if b.get_gid().startswith("zone:space grid:"):
+            got.setdefault(b.get_gid(), []).append((b.get_x(), b.get_x() + b.get_width()))
+    assert want, "the fixture's plan holds no grid block: the check would prove nothing"
+    assert sorted(got) == sorted(want)
+    for gid, spans in want.items():
+        flat = [x for span in sorted(got[gid]) for x in span]
+        assert flat == pytest.approx([x for span in _union(spans) for x in span]), gid
+    # merging pays: fewer bars than block reservations
+    assert len(bars) < len(res)
+
+
 def test_gantt_has_a_lane_per_arm_zone_and_tool(planned: tuple[CompiledCell, Schedule]) -> None:
     cc, s = planned
     p = cc.problem
@@ -64,7 +109,7 @@ def test_gantt_has_a_lane_per_arm_zone_and_tool(planned: tuple[CompiledCell, Sch
     n_waits = sum(int((w > 0).sum()) for w in s.waits)
     assert len(_gids(fig, "wait:")) == n_waits
     res = [r for r in s.reservations(p) if r.end > r.start]
-    assert len(_gids(fig, "zone:")) == sum(r.kind != "tool" for r in res)
+    _check_zone_bars(fig, res)
     assert len(_gids(fig, "tool:")) == sum(r.kind == "tool" for r in res)
     # each planned bar spans its task, in its arm's lane
     t0 = p.task_names[0]
@@ -122,13 +167,15 @@ def test_zone_timeline_lanes_and_bars(planned: tuple[CompiledCell, Schedule]) ->
         )
         tools = list(dict.fromkeys(r.resource for r in res if r.kind == "tool"))
         assert labels == [*zones, *(f"tool {k}" for k in tools)]
-        assert len(fig.axes[0].patches) == sum(r.end > r.start for r in res)
+        _check_zone_bars(fig, res)
+        assert len(_gids(fig, "tool:")) == sum(r.end > r.start and r.kind == "tool" for r in res)
         legend = fig.axes[0].get_legend()
         assert legend is not None
         texts = [t.get_text() for t in legend.get_texts()]
         assert texts[: p.n_arms] == [f"arm {a}" for a in dict.fromkeys(r.arm for r in res)]
     no_tools = zone_timeline(res, tools=False)
-    assert len(no_tools.axes[0].patches) == sum(r.end > r.start and r.kind != "tool" for r in res)
+    _check_zone_bars(no_tools, res)
+    assert not _gids(no_tools, "tool:")
     with pytest.raises(ValidationError, match="Reservation records"):
         zone_timeline([1, 2])
 
@@ -263,8 +310,7 @@ def test_a_run_with_a_failed_task_is_drawn_from_its_tasks(
     (mark,) = [ln for ln in fig.axes[0].lines if ln.get_gid() == f"fault:crash:{p.arm_names[0]}"]
     assert list(mark.get_xdata()) == [3.0] and list(mark.get_ydata()) == [0]
     # the run's zone use fills the lower half of the zone lanes
-    executed_zones = [g for g in _gids(fig, "zone:") if g.endswith(":executed")]
-    assert len(executed_zones) == sum(r.end > r.start and r.kind != "tool" for r in run._res)
+    _check_zone_bars(fig, run._res, ":executed")
     # poses come from the completed tasks: the failed one is never entered
     arm = p.arm_names[int(s.arms(p)[failed])]
     mid = 0.5 * (float(s.start[failed]) + float(s.end[failed]))

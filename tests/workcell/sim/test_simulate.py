@@ -49,7 +49,7 @@ from workcell.sim import (
     simulate,
 )
 from workcell.sim.control.controller import INTERNAL_MESSAGES, pipeline_offset
-from workcell.sim.events.trace import COLUMNS, Trace
+from workcell.sim.events.trace import COLUMNS, Trace, TraceEvent
 from workcell.sim.harness.simulate import check_control_bound
 
 GOLDEN = Path(__file__).parent / "golden" / "supersigma_trace.json"
@@ -452,6 +452,11 @@ def test_result_tables_and_files(supersigma: Any, plans: Any, tmp_path: Path) ->
     r = simulate(supersigma, plans["supersigma"]["greedy"], options=SimOptions(monitor=False))
     assert isinstance(r, SimResult)
     assert list(r.trace.to_dataframe().columns) == list(COLUMNS)
+    # the tables and the JSON are written field by field in the order of COLUMNS
+    assert tuple(f.name for f in dataclasses.fields(TraceEvent)) == COLUMNS
+    events = list(r.trace)
+    rows = r.trace.to_dataframe().to_dict("records")
+    assert [dataclasses.asdict(e) for e in events] == rows
     tf = r.tasks_frame()
     assert list(tf.columns) == [
         "task",
@@ -478,7 +483,7 @@ def test_result_tables_and_files(supersigma: Any, plans: Any, tmp_path: Path) ->
     d = r.save(tmp_path / "out")
     assert {f.name for f in d.iterdir()} == {"trace.json", "metrics.json", "tasks.csv"}
     back = Trace.from_json((d / "trace.json").read_text())
-    assert len(back) == len(r.trace)
+    assert list(back) == events
     joints = r.joints([0.0, 10.0])
     assert set(joints) == {"left", "right"} and joints["left"].shape == (2, 4)
 
