@@ -481,9 +481,16 @@ def gantt(
                     linewidth=0.5,
                 )
     if lanes:
-        planned = (
-            (_lane_of(r.kind, r.resource), r.resource, r.task or "start", r.arm, r.kind)
-            + (float(r.start), float(r.end))
+        planned: Iterator[LaneRow] = (
+            (
+                _lane_of(r.kind, r.resource),
+                r.resource,
+                r.task or "start",
+                r.arm,
+                r.kind,
+                float(r.start),
+                float(r.end),
+            )
             for r in schedule.reservations(problem)
         )
         for key, resource, task, arm, _, s, e in _lane_bars(planned):

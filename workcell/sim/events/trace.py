@@ -125,7 +125,17 @@ def _values(e: TraceEvent) -> tuple[Any, ...]:
     plain tuple, which ``dataclasses.asdict``'s deep copy only slowed: 7 s of
     writing a ``cell8`` run's 87,000 records)."""
     return (
-        e.time, e.kind, e.arm, e.task, e.zone, e.message, e.src, e.dst, e.size, e.delay, e.detail
+        e.time,
+        e.kind,
+        e.arm,
+        e.task,
+        e.zone,
+        e.message,
+        e.src,
+        e.dst,
+        e.size,
+        e.delay,
+        e.detail,
     )
 
 
