@@ -234,3 +234,33 @@ def test_polish_sweeps_are_exclusive() -> None:
 
     with pytest.raises(SystemExit):
         bench_polish.main(["--tune", "--fjsp", "--quick"])
+
+
+def test_revision_process_runs_a_revision_and_answers_line_by_line() -> None:
+    """``RevisionProcess`` (the baselines of ``bench_sim`` and ``bench_resolve_loop``):
+    the revision's tree unpacked first on the child's path, its job file read, one
+    JSON line per line sent, and the tree removed on close. The quick runs of those
+    benchmarks run without a baseline (its kernels compile for about a minute)."""
+    from benchmarks.common import RevisionProcess
+
+    script = (
+        "import json, sys\n"
+        "root, job = sys.argv[1], sys.argv[2]\n"
+        "sys.path.insert(0, root)\n"
+        "import benchmarks.common as c\n"
+        "data = open(job, 'rb').read().decode()\n"
+        "print('ready', flush=True)\n"
+        "for line in sys.stdin:\n"
+        "    print(json.dumps({'got': line.strip(), 'job': data,\n"
+        "                      'from_root': c.__file__.startswith(root)}), flush=True)\n"
+    )
+    child = RevisionProcess("HEAD", script, b"the job")
+    where = Path(child.dir.name)
+    try:
+        assert (where / "benchmarks" / "common.py").is_file()
+        assert child.rev and len(child.rev) >= 7
+        for word in ("one", "two"):
+            assert child.ask(word) == {"got": word, "job": "the job", "from_root": True}
+    finally:
+        child.close()
+    assert not where.exists()
