@@ -31,7 +31,10 @@ model is exact and CP-SAT's bound is a bound of the problem. Otherwise times
 are rounded outwards (starts down, ends up) at a 1e-3 resolution: the
 schedules stay valid but the bound falls back to :func:`lower_bound`.
 The search is hinted with the earliest-finish-time schedule that also sets
-the horizon (``hint=False`` to start cold). The blocking oracle is not
+the horizon (``hint=False`` to start cold). Where times are rounded, the hint
+is first re-timed in the model's units with its modes and orders
+(:func:`repair_hint`: rounded as it is, it is usually no solution), and a run
+that finds nothing better returns that schedule. The blocking oracle is not
 modelled: when every detour it charges is finite, each mode is padded with
 its largest (:func:`oracle_padding`; the schedule stays valid, the bound is
 not kept); otherwise the model leaves it out, a relaxation, so CP-SAT's bound
@@ -44,6 +47,7 @@ On compiled cells see :mod:`scheduler.reference`.
 from __future__ import annotations
 
 import bisect
+import collections
 import itertools
 import math
 import time
@@ -295,6 +299,10 @@ def build_model(
     P: dict[int, dict[int, Any]] = {}
     mode_iv: dict[int, Any] = {}
     res_iv: dict[int, list[Any]] = {}
+    # what each interval of res_iv stands for, in the same order: a window
+    # (mode, delay index of its start, start offset, index of its end, end
+    # offset), a tool held through a mode (mode,) or an arm's start zone (-1 - arm,)
+    res_of: dict[int, list[tuple[Any, ...]]] = {}
     master = []
     for t in range(T):
         lits = []
@@ -362,14 +370,17 @@ def build_model(
                     size = mdl.new_int_var(max(fixed, 0), H, "")
                     iv = mdl.new_optional_interval_var(pts[i] + lo(s), size, pts[k] + hi(e), x, "")
                 res_iv.setdefault(r, []).append(iv)
+                res_of.setdefault(r, []).append((m, i, s, k, e))
             for r in sh.tools:
                 if r in shared:
                     res_iv.setdefault(r, []).append(mode_iv[m])
+                    res_of.setdefault(r, []).append((m,))
         mdl.add_exactly_one(lits)
         for q in p.task_preds[t]:
             mdl.add(S[t] >= E[q])
     # arms
-    first = add_arm_sequences(mdl, p, mode_iv, X, S, E, hi)
+    arcs: dict[tuple[int, int], Any] = {}
+    first = add_arm_sequences(mdl, p, mode_iv, X, S, E, hi, arcs)
     # arms standing in exclusive start zones until they leave
     for a in range(p.n_arms):
         zs = [z for z in p.arm_start_zones[a] if p.zone_exclusive[z] and z in shared]
@@ -391,6 +402,7 @@ def build_model(
             mdl.add(dep == H)
         for z in zs:
             res_iv.setdefault(z, []).append(mdl.new_interval_var(0, dep, dep, f"start{a}_{z}"))
+            res_of.setdefault(z, []).append((-1 - a,))
     for ivs in res_iv.values():
         if len(ivs) > 1:
             mdl.add_no_overlap(ivs)
@@ -398,29 +410,263 @@ def build_model(
     mk = mdl.new_int_var(0, H, "makespan")
     mdl.add_max_equality(mk, E)
     mdl.minimize(mk)
-    return mdl, {"S": S, "E": E, "X": X, "P": P, "makespan": mk, "scale": scale, "exact": exact}
+    return mdl, {
+        "S": S,
+        "E": E,
+        "X": X,
+        "P": P,
+        "makespan": mk,
+        "scale": scale,
+        "exact": exact,
+        "res_iv": res_iv,
+        "res_of": res_of,
+        "arcs": arcs,
+        "pad": pad,
+        "rounding": rounding,
+        "horizon_units": H,
+    }
 
 
-def _schedule_of(problem: Problem, solver: Any, v: dict[str, Any], pad: Any) -> Schedule:
-    """The schedule of a solved model (starts and waits in seconds)."""
+def _schedule_of(
+    problem: Problem, value: Callable[[Any], int], v: dict[str, Any], pad: Any
+) -> Schedule:
+    """The schedule of a solution of the model (starts and waits in seconds);
+    ``value`` gives a model variable's value (``solver.value``, or a lookup in
+    a vector of values by variable index)."""
     p, scale = problem, v["scale"]
     T = p.n_tasks
-    modes = np.array(
-        [next(m for m in p.task_modes[t] if solver.boolean_value(v["X"][m])) for t in range(T)]
-    )
-    starts = np.array([solver.value(v["S"][t]) / scale for t in range(T)])
+    modes = np.array([next(m for m in p.task_modes[t] if value(v["X"][m]) == 1) for t in range(T)])
+    starts = np.array([value(v["S"][t]) / scale for t in range(T)])
     ws = []
     for t in range(T):
         m = int(modes[t])
         w = np.zeros(len(p.shapes[m].borders))
         pts = v["P"][m]
-        prev = solver.value(pts[0])
+        prev = value(pts[0])
         for i in sorted(pts)[1:]:
-            cur = solver.value(pts[i])
+            cur = value(pts[i])
             w[i - 1] = (cur - prev) / scale
             prev = cur
         ws.append(w)
     return Schedule.from_starts(p, modes, starts, ws, None if pad is None else pad[modes])
+
+
+def _hinted_span(
+    problem: Problem, hint: Schedule, what: tuple[Any, ...]
+) -> tuple[float, float] | None:
+    """Seconds: when the hint holds a resource interval of the model (``what``,
+    as recorded in ``res_of`` by :func:`build_model`); None when the hint does
+    not use it (a mode it did not choose)."""
+    m = int(what[0])
+    if m < 0:  # an arm's start zone: held from 0, before anyone else
+        return (0.0, 0.0)
+    t = int(problem.mode_task[m])
+    if int(hint.mode[t]) != m:
+        return None
+    st = float(hint.start[t])
+    if len(what) == 1:  # a tool: the whole mode
+        return (st, float(hint.end[t]))
+    _, i, s, k, e = what
+    cw = np.concatenate([[0.0], np.cumsum(hint.waits[t])])
+    return (st + float(cw[i]) + float(s), st + float(cw[k]) + float(e))
+
+
+def _longest_paths(n: int, edges: list[tuple[int, int, int]], lower: list[int]) -> list[int] | None:
+    """The least values ``x >= lower`` with ``x[w] >= x[u] + c`` for every edge
+    ``(u, w, c)``; None when there are none (a cycle of positive length).
+
+    A topological pass (Kahn's order) when the edges form no cycle, as the
+    hint's orders almost always do; else a first-in first-out label-correcting
+    pass, which gives up (None) after ``20 * (n + len(edges))`` improvements
+    (in the order of creation, task by task, it needed over 50 times that on
+    ``cell8``, where the topological pass takes one).
+
+    Examples
+    --------
+    >>> _longest_paths(3, [(0, 1, 2), (1, 2, 3), (0, 2, 1)], [1, 0, 0])
+    [1, 3, 6]
+    >>> _longest_paths(2, [(0, 1, 1), (1, 0, 0)], [0, 0]) is None
+    True
+    """
+    out: list[list[tuple[int, int]]] = [[] for _ in range(n)]
+    indeg = [0] * n
+    for u, w, c in edges:
+        out[u].append((w, c))
+        indeg[w] += 1
+    dist = list(lower)
+    ready = collections.deque(i for i in range(n) if indeg[i] == 0)
+    done = 0
+    while ready:
+        u = ready.popleft()
+        done += 1
+        for w, c in out[u]:
+            dist[w] = max(dist[w], dist[u] + c)
+            indeg[w] -= 1
+            if indeg[w] == 0:
+                ready.append(w)
+    if done == n:
+        return dist
+    dist = list(lower)  # a cycle: label-correcting, which detects a positive one
+    queue = collections.deque(range(n))
+    queued = [True] * n
+    budget = 20 * (len(edges) + n)
+    while queue:
+        u = queue.popleft()
+        queued[u] = False
+        for w, c in out[u]:
+            if dist[u] + c > dist[w]:
+                dist[w] = dist[u] + c
+                budget -= 1
+                if budget < 0:
+                    return None
+                if not queued[w]:
+                    queued[w] = True
+                    queue.append(w)
+    return dist
+
+
+def _retimed(problem: Problem, v: dict[str, Any], hint: Schedule) -> dict[int, int] | None:
+    """The earliest values, in model units, of the starts, delay points and ends
+    of the hint's modes (by model variable index) that keep the hint's order on
+    every arm and every resource of the model (:func:`repair_hint`); None when
+    that order has no such times under the model's horizon.
+
+    Every constraint between them is a difference ``x >= y + c`` once the modes
+    and orders are fixed, so the earliest times are longest paths, found by a
+    first-in first-out label-correcting pass from the releases and arrival heads
+    (a positive cycle, which only ties between zero-length uses could make, ends
+    it after a bounded number of passes).
+    """
+    p = problem
+    lo, hi = _rounders(v["scale"], v["exact"], v["rounding"])
+    pad = v["pad"]
+    arrive = arrival_heads(p)
+    T = p.n_tasks
+    var: list[Any] = []
+    lower: list[int] = []
+    start_of: dict[tuple[int, int], int] = {}  # (task, delay index) -> node
+    s_node, e_node = [0] * T, [0] * T
+    edges: list[tuple[int, int, int]] = []  # (u, w, c): value[w] >= value[u] + c
+
+    def node(x: Any, least: int = 0) -> int:
+        var.append(x)
+        lower.append(least)
+        return len(var) - 1
+
+    for t in range(T):
+        m = int(hint.mode[t])
+        pts = v["P"][m]
+        s_node[t] = prev = node(v["S"][t], max(hi(float(p.task_release[t])), hi(float(arrive[m]))))
+        start_of[(t, 0)] = prev
+        for i in sorted(pts)[1:]:
+            n = node(pts[i])
+            edges.append((prev, n, 0))
+            start_of[(t, i)] = prev = n
+        d = float(p.shapes[m].duration) + (float(pad[m]) if pad is not None else 0.0)
+        e_node[t] = node(v["E"][t])
+        edges.append((prev, e_node[t], hi(d)))
+        edges += [(e_node[q], s_node[t], 0) for q in p.task_preds[t]]
+    arms = hint.arms(p)
+    first: dict[int, int] = {}
+    for a in range(p.n_arms):
+        ts = sorted(np.flatnonzero(arms == a).tolist(), key=lambda t: (hint.start[t], t))
+        if not ts:
+            continue
+        first[a] = ts[0]
+        if not p._setup.zero:
+            head = float(p.arm_available[a]) + p.setup_time(a, -1, ts[0])
+            lower[s_node[ts[0]]] = max(lower[s_node[ts[0]]], hi(head))
+        for t, u in itertools.pairwise(ts):
+            gap = 0 if p._setup.zero else hi(p.setup_time(a, t, u))
+            edges.append((e_node[t], s_node[u], gap))
+
+    def ends(what: tuple[Any, ...]) -> tuple[tuple[int, int], tuple[int, int]] | None:
+        """((node, offset) of the start, (node, offset) of the end) of a use;
+        None for an arm's start zone (it starts at 0)."""
+        m = int(what[0])
+        if m < 0:
+            return None
+        t = int(p.mode_task[m])
+        if len(what) == 1:
+            return (s_node[t], 0), (e_node[t], 0)
+        _, i, s_off, k, e_off = what
+        return (start_of[(t, i)], lo(s_off)), (start_of[(t, k)], hi(e_off))
+
+    for whats in v["res_of"].values():
+        held = sorted(
+            (span, what) for what in whats if (span := _hinted_span(p, hint, what)) is not None
+        )
+        for (_, wa), (_, wb) in itertools.pairwise(held):
+            use_b = ends(wb)
+            if use_b is None:
+                return None  # a start zone after another use: not the hint's order
+            use_a = ends(wa)
+            if use_a is None:  # held from 0 until its arm's first task leaves for it
+                arm = -1 - int(wa[0])
+                if arm not in first:
+                    return None
+                f = first[arm]
+                a_end = (s_node[f], -lo(p.setup_time(arm, -1, f)))
+            else:
+                a_end = use_a[1]
+            b_start = use_b[0]
+            edges.append((a_end[0], b_start[0], a_end[1] - b_start[1]))
+    dist = _longest_paths(len(var), edges, lower)
+    if dist is None:
+        return None
+    if max(dist, default=0) > v["horizon_units"]:
+        return None
+    return {int(x.index): int(d) for x, d in zip(var, dist, strict=True)}
+
+
+def repair_hint(
+    mdl: Any, problem: Problem, v: dict[str, Any], hint: Schedule, time_limit: float
+) -> list[int] | None:
+    """A solution of the model ``mdl`` (built by :func:`build_model`) with the
+    hint's modes and its order on every arm and resource, as a value per model
+    variable; None when there is none, or none is found within ``time_limit``
+    seconds.
+
+    Rounded outwards to a unit that does not divide the data, a schedule is
+    usually no solution of the model: each window grows by up to a unit, so
+    two windows that touch in the schedule overlap by a unit or two (on the
+    built-in cells CP-SAT then starts from nothing and, with 2 workers, finds
+    no schedule in 10 s). Here the hint is re-timed in the model's units
+    (:func:`_retimed`: the earliest starts, delay points and ends with its
+    modes and orders), and a copy of the model with those values, the modes
+    and the circuits' arcs along each arm's order fixed is solved for the
+    rest of the variables (intervals' sizes, start-zone departures, the
+    makespan): propagation only.
+    """
+    from ortools.sat.python import cp_model
+
+    p = problem
+    times = _retimed(p, v, hint)
+    if times is None:
+        return None
+    rep = mdl.clone()
+    rep.clear_hints()
+    for t in range(p.n_tasks):
+        for m in p.task_modes[t]:
+            rep.add(rep.get_bool_var_from_proto_index(v["X"][m].index) == int(m == hint.mode[t]))
+    for i, value in times.items():
+        rep.add(rep.get_int_var_from_proto_index(i) == value)
+    arms = hint.arms(p)
+    for a in range(p.n_arms):
+        ts = sorted(np.flatnonzero(arms == a).tolist(), key=lambda t: (hint.start[t], t))
+        # the circuit's arcs along that order (with setups; else there are none)
+        ms = [-1 - a, *(int(hint.mode[t]) for t in ts), -1 - a]
+        for key in itertools.pairwise(ms) if len(ms) > 2 else [(-1 - a, -1 - a)]:
+            lit = v["arcs"].get(key)
+            if lit is not None:
+                rep.add(rep.get_bool_var_from_proto_index(lit.index) == 1)
+    solver = cp_model.CpSolver()
+    solver.parameters.max_time_in_seconds = max(0.01, time_limit)
+    solver.parameters.num_workers = 1
+    code = solver.solve(rep)
+    if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
+        return None
+    return list(solver.response_proto.solution)
 
 
 def _add_hint(mdl: Any, problem: Problem, v: dict[str, Any], hint: Schedule) -> None:
@@ -627,7 +873,17 @@ def solve_cpsat(
         # with an oracle, the greedy schedule's detours only lengthen tasks: it
         # is still a solution of the relaxed model
         hint = ev.schedule(first) if first is not None else None
-    if hint is not None and hint is not False:
+    repaired: list[int] | None = None
+    if isinstance(hint, Schedule) and not v["exact"]:
+        # rounded outwards, the hint is usually no solution of the model: re-timed
+        # in the model's units with its modes and orders, it is (repair_hint)
+        left = 1.0 if time_limit is None else max(0.01, time_limit - (time.perf_counter() - t0))
+        repaired = repair_hint(mdl, p, v, hint, left)
+        stats.extra["hint_repaired"] = repaired is not None
+    if repaired is not None:
+        for i, value in enumerate(repaired):
+            mdl.add_hint(mdl.get_int_var_from_proto_index(i), value)
+    elif hint is not None and hint is not False:
         _add_hint(mdl, p, v, hint)
     stats.phases["model"] = time.perf_counter() - t0
     solver = cp_model.CpSolver()
@@ -674,11 +930,20 @@ def solve_cpsat(
             seed,
             stats,
         )
-    if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
+    # no solution found, but the repaired hint is one of the model (CP-SAT checks a
+    # complete hint; on cell8 its presolve alone outlasts 10 s): that schedule
+    from_hint = code not in (cp_model.OPTIMAL, cp_model.FEASIBLE) and repaired is not None
+    stats.extra["from_hint"] = from_hint
+    if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE) and not from_hint:
         return Result(SolveStatus.UNKNOWN, None, math.inf, bound, runtime, "cpsat", seed, stats)
     T = p.n_tasks
     sched: Schedule | None = None
-    cand = _schedule_of(p, solver, v, pad)
+    if from_hint:
+        assert repaired is not None
+        values = repaired
+        cand = _schedule_of(p, lambda x: int(values[x.index]), v, pad)
+    else:
+        cand = _schedule_of(p, solver.value, v, pad)
     try:
         # with an oracle and no padding, valid only if no parked arm is in the way
         validate(p, cand)
@@ -694,6 +959,8 @@ def solve_cpsat(
         if sched is None:
             return Result(SolveStatus.UNKNOWN, None, math.inf, bound, runtime, "cpsat", seed, stats)
     mk = validate(p, sched)
+    if from_hint:  # the only solution: found when the model was built
+        stats.record(stats.phases["model"], mk)
     optimal = (
         code == cp_model.OPTIMAL
         and exact
@@ -755,6 +1022,7 @@ def add_arm_sequences(
     S: Any,
     E: Any,
     to_units: Callable[[float], int],
+    arcs_out: dict[tuple[int, int], Any] | None = None,
 ) -> dict[int, Any]:
     """Each arm does one mode at a time, with its setups (travel) between them.
 
@@ -769,6 +1037,11 @@ def add_arm_sequences(
     (:func:`arrival_heads` is). Shared by the CP-SAT model and the
     relaxations.
 
+    ``arcs_out``, when given, receives the circuits' arc literals: ``(m, m2)``
+    "mode ``m2`` follows ``m`` on their arm", ``(-1 - a, m)`` "``m`` is arm
+    ``a``'s first", ``(m, -1 - a)`` "its last", ``(-1 - a, -1 - a)`` "arm ``a``
+    does nothing".
+
     Returns
     -------
     dict
@@ -777,6 +1050,7 @@ def add_arm_sequences(
         ``available[a]`` alone).
     """
     first: dict[int, Any] = {}
+    arcs_out = {} if arcs_out is None else arcs_out
     for a in range(p.n_arms):
         modes = [int(m) for m in np.flatnonzero(p.mode_arm == a)]
         if not modes:
@@ -790,22 +1064,25 @@ def add_arm_sequences(
             t = int(p.mode_task[m])
             go = mdl.new_bool_var("")
             first[m] = go
+            arcs_out[(-1 - a, m)] = go
             arcs.append((0, i, go))
             head = avail + p.setup_time(a, -1, t)
             if math.isfinite(head):
                 mdl.add(S[t] >= to_units(head)).only_enforce_if(go)
             else:
                 mdl.add(go == 0)
-            arcs.append((i, 0, mdl.new_bool_var("")))
+            last = arcs_out[(m, -1 - a)] = mdl.new_bool_var("")
+            arcs.append((i, 0, last))
             arcs.append((i, i, ~X[m]))
             for j, m2 in enumerate(modes, start=1):
                 if m2 == m:
                     continue
                 t2 = int(p.mode_task[m2])
-                lit = mdl.new_bool_var("")
+                lit = arcs_out[(m, m2)] = mdl.new_bool_var("")
                 arcs.append((i, j, lit))
                 mdl.add(S[t2] >= E[t] + to_units(p.setup_time(a, t, t2))).only_enforce_if(lit)
-        arcs.append((0, 0, mdl.new_bool_var("")))
+        idle = arcs_out[(-1 - a, -1 - a)] = mdl.new_bool_var("")
+        arcs.append((0, 0, idle))
         mdl.add_circuit(arcs)
     return first
 
