@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -129,9 +130,24 @@ def test_outside_seeds_smoke(tmp_path: Path) -> None:
     assert data["seeds"] == [0, 1, 2] and len(data["rows"]) == 6
 
 
+def _seed_runs(runs: dict[str, Any], family: str) -> Any:
+    """The results frame ``seed_table`` reads: per problem, the tree's and
+    CP-SAT's makespans with seeds 0 and 1."""
+    import pandas as pd
+
+    rows = [
+        (name, label, seed, mk[seed])
+        for name, both in runs.items()
+        for label, mk in zip(("tree", "cpsat"), both, strict=True)
+        for seed in (0, 1)
+    ]
+    return pd.DataFrame(rows, columns=["instance", "label", "seed", "makespan"]).assign(
+        family=family, time_limit=1.0, instance_params='{"tasks": 5}'
+    )
+
+
 def test_outside_seed_table_counts() -> None:
     """The seed table tells a difference of one seed from one beyond the spread."""
-    import pandas as pd
 
     from benchmarks.bench_outside import seed_table
 
@@ -140,16 +156,7 @@ def test_outside_seed_table_counts() -> None:
         "q": ((9.0, 9.0), (8.0, 8.0)),  # behind with every seed, beyond the spread
         "r": ((21.0, 18.0), (20.0, 20.0)),  # ahead on the mean, behind with seed 0
     }
-    rows = [
-        (name, label, seed, mk[seed])
-        for name, both in runs.items()
-        for label, mk in zip(("tree", "cpsat"), both, strict=True)
-        for seed in (0, 1)
-    ]
-    df = pd.DataFrame(rows, columns=["instance", "label", "seed", "makespan"]).assign(
-        family="routes", time_limit=1.0, instance_params='{"tasks": 5}'
-    )
-    text = seed_table(df)
+    text = seed_table(_seed_runs(runs, "routes"))
     assert "| q | 9 9 | 9.0 (9-9) | 8 8 | 8.0 (8-8) | +12.50% |" in text
     assert "| r | 21 18 | 19.5 (18-21) | 20 20 | 20.0 (20-20) | -2.50% |" in text
     assert "- tree behind cpsat with the same seed: seed 0 on 2 of 3, seed 1 on 2 of 3" in text
@@ -160,7 +167,6 @@ def test_outside_seed_table_counts() -> None:
 def test_outside_seed_table_counts_a_run_without_a_schedule_as_longest() -> None:
     """A run without a schedule (nan) is longer than any schedule: it is behind with
     its seed, its mean is 'none' and behind any finite mean, and it is counted."""
-    import pandas as pd
 
     from benchmarks.bench_outside import seed_table
 
@@ -170,16 +176,7 @@ def test_outside_seed_table_counts_a_run_without_a_schedule_as_longest() -> None
         "b": ((nan, nan), (nan, 40.0)),  # the tree never, CP-SAT once
         "c": ((nan, nan), (nan, nan)),  # neither: nobody is behind
     }
-    rows = [
-        (name, label, seed, mk[seed])
-        for name, both in runs.items()
-        for label, mk in zip(("tree", "cpsat"), both, strict=True)
-        for seed in (0, 1)
-    ]
-    df = pd.DataFrame(rows, columns=["instance", "label", "seed", "makespan"]).assign(
-        family="stations", time_limit=1.0, instance_params='{"tasks": 5}'
-    )
-    text = seed_table(df)
+    text = seed_table(_seed_runs(runs, "stations"))
     assert "| a | 30 31 | 30.5 (30-31) | none 32 | none (32-none) | - |" in text
     assert "| b | none none | none (none-none) | none 40 | none (40-none) | - |" in text
     assert "- tree behind cpsat with the same seed: seed 0 on 0 of 3, seed 1 on 1 of 3" in text
