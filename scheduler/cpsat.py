@@ -877,7 +877,10 @@ def solve_cpsat(
     if isinstance(hint, Schedule) and not v["exact"]:
         # rounded outwards, the hint is usually no solution of the model: re-timed
         # in the model's units with its modes and orders, it is (repair_hint)
-        left = 1.0 if time_limit is None else max(0.01, time_limit - (time.perf_counter() - t0))
+        # the fill is propagation only (0.7 s on cell8 with the re-timing): a work-limited
+        # run (no wall-clock limit) gets a generous cap, so that whether the repair
+        # succeeds does not depend on the machine's speed (repeatable runs)
+        left = 60.0 if time_limit is None else max(0.01, time_limit - (time.perf_counter() - t0))
         repaired = repair_hint(mdl, p, v, hint, left)
         stats.extra["hint_repaired"] = repaired is not None
     if repaired is not None:
