@@ -23,9 +23,10 @@ The kernel is a small package, one job per module:
 
 ``MULTIARM_NO_JIT=1`` (or ``NUMBA_DISABLE_JIT=1``) runs the same code as
 plain Python, which ``benchmarks/bench_kernel.py`` uses to measure what the
-compilation buys. The first compile takes tens of seconds once per machine
+compilation buys. The first compile takes about a minute once per machine
 (numba's on-disk cache keeps it); :func:`warm_up` does it up front and
-announces it, so that solvers can start their clock afterwards.
+announces it (:data:`COMPILE_NOTE`; the ``multiarm`` command shows it on
+stderr), so that solvers can start their clock afterwards.
 
 With a blocking oracle, its answers live in an array
 (:class:`OracleTable`) the compiled decoders read; unknown answers are asked
@@ -55,6 +56,7 @@ from scheduler.kernel import place as _place
 from scheduler.kernel import resume as _resume
 from scheduler.kernel._jit import EPS, INF, drop_stale_cache, jit_enabled
 from scheduler.kernel.api import (
+    COMPILE_NOTE,
     decode,
     expand,
     expand_blocking,
@@ -92,6 +94,7 @@ drop_stale_cache(
 )
 
 __all__ = [
+    "COMPILE_NOTE",
     "EPS",
     "INF",
     "Arrays",

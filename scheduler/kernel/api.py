@@ -52,6 +52,7 @@ from scheduler.kernel.resume import (
 from scheduler.problem import Model, Window
 
 __all__ = [
+    "COMPILE_NOTE",
     "decode",
     "expand",
     "expand_blocking",
@@ -419,6 +420,13 @@ class _Parked:
 _WARM = False
 
 
+COMPILE_NOTE = (
+    "compiling the scheduler kernel, once per machine "
+    "(about a minute; numba caches it on disk for later runs)..."
+)
+"""What :func:`warm_up` announces before a compile that is not cached yet."""
+
+
 def _cached_on_disk() -> bool:
     """Whether numba's on-disk cache already holds the kernel's entry points."""
     for fn in (
@@ -443,16 +451,17 @@ def _cached_on_disk() -> bool:
 def warm_up(announce: Callable[[str], None] | None = None) -> float:
     """Compile (or load from numba's on-disk cache) every kernel entry point.
 
-    Call it before starting a solver's clock: the first compile takes tens
-    of seconds once per machine (cached on disk afterwards), loading takes
-    about a second per process; later calls return at once.
+    Call it before starting a solver's clock: the first compile takes about
+    a minute once per machine (55-65 s measured on 2 shared cores, 2026-12;
+    cached on disk afterwards), loading takes about a second per process;
+    later calls return at once.
 
     Parameters
     ----------
     announce : callable or None
-        Receives ``"compiling the scheduler kernel (one time, ~20 s)..."``
-        before a compile that is not cached yet; default: an INFO message
-        on the ``scheduler.kernel`` logger.
+        Receives :data:`COMPILE_NOTE` before a compile that is not cached
+        yet; default: an INFO message on the ``scheduler.kernel`` logger
+        (the ``multiarm`` command shows it on stderr).
 
     Returns
     -------
@@ -471,11 +480,10 @@ def warm_up(announce: Callable[[str], None] | None = None) -> float:
         return 0.0
     t0 = time.perf_counter()
     if not _cached_on_disk():
-        msg = "compiling the scheduler kernel (one time, ~20 s)..."
         if announce is None:
-            log.info(msg)
+            log.info(COMPILE_NOTE)
         else:
-            announce(msg)
+            announce(COMPILE_NOTE)
     m = Model()
     m.add_zone("E")
     m.add_zone("S", "shared")

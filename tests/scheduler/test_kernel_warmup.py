@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from scheduler.kernel import api, drop_stale_cache, jit_enabled, warm_up
+from scheduler.kernel import COMPILE_NOTE, api, drop_stale_cache, jit_enabled, warm_up
 
 
 def test_a_compile_is_announced_once(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -17,7 +17,8 @@ def test_a_compile_is_announced_once(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(api, "_cached_on_disk", lambda: False)
     said: list[str] = []
     spent = warm_up(said.append)
-    assert said == ["compiling the scheduler kernel (one time, ~20 s)..."]
+    assert said == [COMPILE_NOTE]
+    assert "once per machine" in COMPILE_NOTE and "about a minute" in COMPILE_NOTE
     assert spent > 0.0
     assert warm_up(said.append) == 0.0 and len(said) == 1
 
@@ -29,9 +30,7 @@ def test_the_default_announcement_is_a_log_message(
     monkeypatch.setattr(api, "_cached_on_disk", lambda: False)
     with caplog.at_level(logging.INFO, logger="scheduler.kernel"):
         warm_up()
-    assert [r.getMessage() for r in caplog.records if r.levelno == logging.INFO] == [
-        "compiling the scheduler kernel (one time, ~20 s)..."
-    ]
+    assert [r.getMessage() for r in caplog.records if r.levelno == logging.INFO] == [COMPILE_NOTE]
 
 
 def test_a_cached_kernel_is_loaded_silently(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -130,3 +130,34 @@ def test_schedule_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
     assert "optimal" in capsys.readouterr().out
     assert main(["schedule", str(tmp_path / "missing.json")]) == 1
     assert "cannot read problem file" in capsys.readouterr().err
+
+
+def test_the_one_time_compile_is_announced_on_stderr(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # a first run on a machine compiles the kernel for about a minute: the
+    # command says so instead of sitting silent (the library's note is an INFO log)
+    import logging
+
+    from scheduler import save_problem
+    from scheduler.generate import random_problem
+    from scheduler.kernel import COMPILE_NOTE, api
+
+    path = save_problem(random_problem(2, 4, 1, 0, seed=1), tmp_path / "p.json")
+    logger = logging.getLogger("scheduler.kernel")
+    handlers, level = list(logger.handlers), logger.level
+    monkeypatch.setattr(api, "_WARM", False)
+    monkeypatch.setattr(api, "_cached_on_disk", lambda: False)
+    assert main(["schedule", str(path), "--solver", "greedy"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err.count(f"multiarm: {COMPILE_NOTE}") == 1
+    # a problem file is read, not compiled (the step says so only of a cell)
+    assert any(line.endswith(f"step 1/2: read {path}") for line in err), err
+    from workcell.cli.schedule import _compiled_note
+
+    assert _compiled_note("supersigma") == _compiled_note("c.toml") == " (a cell is compiled)"
+    assert main(["schedule", str(path), "--solver", "greedy"]) == 0  # warm now: silent
+    assert COMPILE_NOTE not in capsys.readouterr().err
+    assert logger.handlers == handlers and logger.level == level
+    docs = " ".join((Path(__file__).parents[2] / "docs" / "cli.md").read_text().split())
+    assert f"`multiarm: {COMPILE_NOTE}`" in docs  # the docs quote the line as it is

@@ -4,13 +4,19 @@ Each command module has ``add_arguments(parser)`` and ``run(args) -> int``;
 :data:`COMMANDS` lists them with their one-line help. :func:`main` turns an
 error of the package's family into one line on stderr and exit status 1,
 Ctrl-C into one line and 130 (the statuses: :mod:`workcell.cli.output`).
+While a command runs, the scheduler kernel's one-time compile note
+(:data:`scheduler.kernel.COMPILE_NOTE`, an INFO message of the library) is
+shown on stderr, so that the first run on a machine does not sit silent
+for a minute.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import logging
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from types import ModuleType
 
 from multiarm import MultiarmError, __version__
@@ -101,13 +107,33 @@ def _one_line(exc: BaseException) -> str:
     return " ".join(part.strip() for part in str(exc).splitlines() if part.strip())
 
 
+@contextlib.contextmanager
+def _compile_notes() -> Iterator[None]:
+    """Show the ``scheduler.kernel`` logger's INFO messages (its one-time
+    compile note) on stderr as ``multiarm: ...`` lines while the block runs."""
+    logger = logging.getLogger("scheduler.kernel")
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("multiarm: %(message)s"))
+    handler.setLevel(logging.INFO)
+    level = logger.level
+    logger.addHandler(handler)
+    if logger.getEffectiveLevel() > logging.INFO:
+        logger.setLevel(logging.INFO)
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``multiarm`` command; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
     func: Callable[[argparse.Namespace], int] = args.func
     try:
-        return func(args)
+        with _compile_notes():
+            return func(args)
     except MultiarmError as exc:
         print(f"error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_ERROR

@@ -67,6 +67,18 @@ def _check_out_file(name: str) -> None:
         raise UsageError(f"--out: directory {str(parent)!r} is not writable")
 
 
+def _compiled_note(name: str) -> str:
+    """`` (a cell is compiled)`` where ``name`` is a cell (a ``.toml`` file or a
+    built-in cell's name, as :func:`workcell.check.load_schedulable` reads it)."""
+    from pathlib import Path
+
+    from workcell.cell import EXAMPLES
+
+    path = Path(name)
+    cell = path.suffix.lower() == ".toml" or (not path.exists() and name in EXAMPLES)
+    return " (a cell is compiled)" if cell else ""
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``schedule``; the exit status."""
     from workcell.check import load_schedulable
@@ -79,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--evaluations is a work limit of the tree search (--solver tree)")
     common.check_count("--evaluations", args.evaluations, 1, MAX_EVALUATIONS)
     with Progress(2, "schedule", enabled=not args.no_progress) as bar:
-        bar.step(f"read {args.problem} (a cell is compiled)")
+        bar.step(f"read {args.problem}{_compiled_note(args.problem)}")
         problem: Problem = load_schedulable(args.problem)
         print(f"{problem!r}; lower bound {lower_bound(problem):.6g}", flush=True)
         bar.step(f"solve ({args.solver}, time limit {args.time_limit:g} s)")
