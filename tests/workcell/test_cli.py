@@ -161,3 +161,32 @@ def test_the_one_time_compile_is_announced_on_stderr(
     assert logger.handlers == handlers and logger.level == level
     docs = " ".join((Path(__file__).parents[2] / "docs" / "cli.md").read_text().split())
     assert f"`multiarm: {COMPILE_NOTE}`" in docs  # the docs quote the line as it is
+
+
+def test_the_compile_note_clears_a_progress_bar_on_a_terminal() -> None:
+    # on a terminal the note goes through tqdm, which clears the bar first
+    # and redraws it after, so the note is a line of its own
+    import io
+    import logging
+
+    pytest.importorskip("tqdm")
+    from workcell.cli.main import _NoteHandler
+    from workcell.cli.output import Progress
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    term = Terminal()
+    handler = _NoteHandler(term)
+    handler.setFormatter(logging.Formatter("multiarm: %(message)s"))
+    with Progress(2, "demo", stream=term) as bar:
+        bar.step("solve")
+        before = term.getvalue()
+        handler.emit(logging.LogRecord("scheduler.kernel", logging.INFO, "", 0, "note", (), None))
+        after = term.getvalue()[len(before) :]
+    # the bar's line blanked, the note on a line of its own, the bar drawn again
+    # (a plain handler would append the note to the bar's line: "...solve]multiarm: note")
+    cleared, note_and_bar = after.split("\rmultiarm: note\n")
+    assert cleared.startswith("\r") and not cleared.strip()
+    assert note_and_bar.startswith("\rdemo:") and note_and_bar.endswith("solve]")

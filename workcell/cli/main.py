@@ -107,12 +107,28 @@ def _one_line(exc: BaseException) -> str:
     return " ".join(part.strip() for part in str(exc).splitlines() if part.strip())
 
 
+class _NoteHandler(logging.StreamHandler):  # type: ignore[type-arg]
+    """A line on stderr; on a terminal through tqdm, so that a progress bar
+    (:class:`workcell.cli.output.Progress`) is cleared first and redrawn after."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if self.stream.isatty():
+            try:
+                from tqdm import tqdm  # type: ignore[import-untyped,unused-ignore]
+            except ImportError:  # pragma: no cover - no bar without tqdm either
+                pass
+            else:
+                tqdm.write(self.format(record), file=self.stream)
+                return
+        super().emit(record)
+
+
 @contextlib.contextmanager
 def _compile_notes() -> Iterator[None]:
     """Show the ``scheduler.kernel`` logger's INFO messages (its one-time
     compile note) on stderr as ``multiarm: ...`` lines while the block runs."""
     logger = logging.getLogger("scheduler.kernel")
-    handler = logging.StreamHandler(sys.stderr)
+    handler = _NoteHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("multiarm: %(message)s"))
     handler.setLevel(logging.INFO)
     level = logger.level
