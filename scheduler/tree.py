@@ -966,9 +966,13 @@ def _solve_tree(
                 mk, w_mode, w_start, w_end, w_waits, w_blocking, found, _evals = got
                 sched = Schedule(w_mode, w_start, w_end, tuple(w_waits), w_blocking)
                 if p.blocking is not None and opt.relaxed_workers:
-                    checked = _checked_against_oracle(p, ev, sched, stats)
+                    checked, as_is = _checked_against_oracle(p, ev, sched, stats)
                     if checked is not None and (best is None or checked.key() < best.key()):
                         best = checked
+                        if as_is is None:  # decoded: the decoder gives its schedule
+                            stats.extra.pop("worker_schedule", None)
+                        else:
+                            stats.extra["worker_schedule"] = as_is
                         stats.record(found, checked.makespan)
                 else:
                     stats.extra["worker_schedule"] = sched
@@ -1305,12 +1309,12 @@ def _member_problem(p: Problem, opt: TreeOptions) -> Problem:
 
 def _checked_against_oracle(
     p: Problem, ev: Evaluator, sched: Schedule, stats: SearchStats
-) -> Solution | None:
+) -> tuple[Solution | None, Schedule | None]:
     """A worker's plan of ``p`` without its oracle, as a solution of ``p``: the
-    plan itself when no parked arm is in its way (``validate`` accepts it),
-    else its modes and start order decoded again with the oracle's detours
-    (None when that order cannot be placed). ``stats.extra["worker_plan"]``
-    says which."""
+    plan itself when no parked arm is in its way (``validate`` accepts it;
+    returned as the second item, for ``_finish`` to keep), else its modes and
+    start order decoded again with the oracle's detours (None when that order
+    cannot be placed). ``stats.extra["worker_plan"]`` says which."""
     from scheduler.schedule import ScheduleError, validate
 
     try:
@@ -1319,12 +1323,9 @@ def _checked_against_oracle(
         order = np.lexsort((np.arange(len(sched.start)), sched.start)).astype(np.int64)
         sol = ev.evaluate(order, np.asarray(sched.mode, dtype=np.int64).copy())
         stats.extra["worker_plan"] = "decoded again with the oracle"
-        return sol
-    # the decoder reproduces a plan no parked arm meets when given its order
-    # and modes; where it cannot, the plan itself is kept beside the solution
+        return sol, None
     stats.extra["worker_plan"] = "valid with the oracle"
-    stats.extra["worker_schedule"] = sched
-    return _solution_of(sched, mk)
+    return _solution_of(sched, mk), sched
 
 
 def _may_race(p: Problem, opt: TreeOptions) -> bool:
