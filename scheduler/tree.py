@@ -115,11 +115,12 @@ class TreeOptions:
     problem without it, and each plan they return is checked against the
     oracle: kept where no parked arm is in its way, else its modes and start
     order are decoded again with the detours. The main process keeps the
-    oracle. Measured on ``cell8`` (docs/scheduler.md, "Solvers"): the list
-    local search without the oracle reached 600.7 and 619.5 s at 10 s
-    (seeds 0-1), with it 649.4 and 633.8 s, and those plans were valid with
-    the oracle; checked on generated problems with a binding oracle
-    (docs/scheduler.md)."""
+    oracle, so the plan returned stays valid. Measured at 10 s
+    (docs/scheduler.md, "Solvers"; nothing tuned): ``cell8`` seeds 0-2
+    651.28, 641.00, 658.14 s without it, 600.70, 622.30, 615.56 s with it
+    (every worker plan valid with the oracle); the other built-in cells
+    unchanged; better or equal on 6 of 6 generated problems whose oracle
+    binds. False: the workers search with the oracle, as the main process."""
     portfolio_max_tasks: int = 40
     """Race CP-SAT (one worker, in a thread) against the tree search on
     problems with at most this many tasks, when the run has a wall-clock
@@ -444,6 +445,8 @@ def _portfolio_member(  # type: ignore[no-untyped-def]
 ) -> None:
     """A forked worker: improve the HEFT schedule (or the place-aware start,
     when it applies and is better) from its own seed, send back the best schedule.
+    ``problem`` may be the main one without its blocking oracle
+    (:attr:`TreeOptions.relaxed_workers`; the main process checks the plan).
 
     Worker ``index`` 1, 3, ... improves with the list local search, the
     neighbourhood the main process does not use on a zone problem (it runs the
@@ -787,12 +790,13 @@ def _solve_tree(
             and (best is None or best.makespan > lb + 1e-9)
         ):
             ctx = multiprocessing.get_context("fork")
-            stats.extra["worker_searches"] = tuple(
-                _member_search(ev, k).__name__ for k in range(1, opt.workers)
-            )
             # with a blocking oracle the workers search the problem without it (its
             # plans are checked against the oracle when they come back)
             relaxed = _member_problem(p, opt)
+            stats.extra["worker_searches"] = tuple(
+                _member_search(ev, k, blocking=relaxed.blocking is not None).__name__
+                for k in range(1, opt.workers)
+            )
             for k in range(1, opt.workers):
                 here, there = ctx.Pipe(duplex=False)
                 proc = ctx.Process(
@@ -1279,7 +1283,9 @@ def _integral_bound(p: Problem, lb: float) -> float:
     return max(lb, math.ceil(lb * scale - 1e-6) / scale)
 
 
-def _member_search(ev: Evaluator, index: int) -> Callable[..., Solution]:
+def _member_search(
+    ev: Evaluator, index: int, blocking: bool | None = None
+) -> Callable[..., Solution]:
     """The improvement a forked worker runs: the list local search with a
     blocking oracle (the only one that handles it) and, on odd ``index``, on
     any problem that is not a pure FJSP; else the tabu search (which is the
@@ -1293,8 +1299,12 @@ def _member_search(ev: Evaluator, index: int) -> Callable[..., Solution]:
     on its decodes (mean ratio; the tabu search ranks its moves in Python).
     A second process with the same search as the main one only adds a seed;
     one with the other neighbourhood searches where the main one cannot go
-    (docs/scheduler.md, "Solvers")."""
-    if ev.blocking or (index % 2 == 1 and not pure_fjsp(ev)):
+    (docs/scheduler.md, "Solvers"). ``blocking`` overrides ``ev.blocking``
+    (the main process names the searches of workers that search the problem
+    without its oracle; an oracle-only problem whose relaxation is a pure
+    FJSP is then named by the zone rule, though its worker runs the graph
+    search)."""
+    if (ev.blocking if blocking is None else blocking) or (index % 2 == 1 and not pure_fjsp(ev)):
         return local_search
     return tabu_search
 
