@@ -58,6 +58,7 @@ def _run_quick(script: str, out: Path, *flags: str) -> subprocess.CompletedProce
         "gap_anatomy",
         "bench_longrun",
         "bench_bounds",
+        "bench_relaxed",
     ],
 )
 def test_benchmark_smoke(script: str, tmp_path: Path) -> None:
