@@ -157,7 +157,7 @@ import heapq
 import itertools
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any
@@ -703,6 +703,8 @@ def prove(
     plain_nodes: int = 100_000,
     select: bool = True,
     stop_at_first: bool = False,
+    domains: Mapping[int, Sequence[int]] | None = None,
+    workers: int = 1,
 ) -> Proof:
     """Prove the optimum by branch and bound (the exact method for compiled cells).
 
@@ -746,6 +748,25 @@ def prove(
         Stop at the first schedule shorter than ``upper`` (reason
         ``"found"``): the search then only answers whether one exists. A
         result with ``proven`` and no schedule says none does.
+    domains : mapping of int to sequence of int, or None
+        Modes the search may give some tasks (task -> its allowed modes;
+        the others keep all theirs): the search and its proof are then of
+        the schedules in which those tasks take those modes. With
+        ``modes``, only the modes in both count.
+    workers : int
+        Processes searching at once (default 1: this one). With more, the
+        mode assignments are split into parts by the modes of the first
+        tasks (in topological order) that have a choice, about four parts a
+        worker, and forked processes prove them, at most ``workers`` at a
+        time, each from the same ``incumbent`` and ``upper`` (so each part's
+        work, and the schedule returned, do not depend on which part ends
+        first; ``max_nodes`` and ``plain_nodes`` are shared out evenly,
+        ``time_limit`` is one wall clock for all). The problem is proven when every part is; the
+        bound is the least of the parts' bounds (a part not searched counts
+        with the root bound). One process where the split gives a single
+        part, ``fork`` is missing, or this is a daemon process (e.g. a Dask
+        worker). ``progress`` then reports each part as it ends, and
+        ``stop`` is read between parts' results (the parts are stopped).
 
     Returns
     -------
@@ -769,6 +790,34 @@ def prove(
 
     t0 = time.perf_counter()
     deadline = math.inf if time_limit is None else t0 + time_limit
+    if workers > 1 and applicable(without_idle_oracle(problem), max_tasks=10**9)[0]:
+        split = _parts(problem, modes, domains, 4 * workers, incumbent)
+        if split and _may_fork():
+            return _prove_parts(
+                problem,
+                split,
+                workers,
+                t0,
+                time_limit,
+                max_nodes,
+                progress,
+                stop,
+                lower,
+                dict(
+                    incumbent=incumbent,
+                    upper=upper,
+                    lower=lower,
+                    waits=waits,
+                    cap_step=cap_step,
+                    modes=modes,
+                    sequences=sequences,
+                    diagram_step=diagram_step,
+                    max_leaves=max_leaves,
+                    plain_nodes=plain_nodes,
+                    select=select,
+                    stop_at_first=stop_at_first,
+                ),
+            )
     if sequences and plain_nodes > 0:
         # first the search without the sequence level, on a small budget: it
         # proves problems with few conflicts at once and gives an incumbent
@@ -785,6 +834,7 @@ def prove(
             modes=modes,
             select=select,
             stop_at_first=stop_at_first,
+            domains=domains,
         )
         first = again(
             None if time_limit is None else time_limit / 4,
@@ -1341,6 +1391,8 @@ def prove(
             return
         t = order[i]
         allowed = p.task_modes[t] if modes is None else (int(modes[t]),)
+        if domains is not None and t in domains:
+            allowed = tuple(m for m in allowed if m in domains[t])
         cands = sorted(allowed, key=lambda m: (m != inc_mode[t], p.mode_duration[m]))
 
         def placed(m: int) -> bool:  # task t in mode m, and the node's bound under the best
@@ -1384,6 +1436,211 @@ def prove(
             ("searched", int(stats["searched"])),
             ("selected", int(stats["selected"])),
         ),
+    )
+
+
+def _parts(
+    problem: Problem,
+    modes: Sequence[int] | None,
+    domains: Mapping[int, Sequence[int]] | None,
+    want: int,
+    incumbent: Schedule | None,
+) -> list[dict[int, tuple[int, ...]]]:
+    """The parts of :func:`prove`'s split (``workers > 1``): the first tasks in
+    topological order that have a choice of modes, until their combinations
+    number at least ``want``, each combination a part (those tasks' modes
+    fixed, with ``domains`` kept for the others), the incumbent's first; []
+    when there is no choice to split."""
+    allowed: dict[int, tuple[int, ...]] = {}
+    for t in range(problem.n_tasks):
+        ms = tuple(problem.task_modes[t]) if modes is None else (int(modes[t]),)
+        if domains is not None and t in domains:
+            ms = tuple(m for m in ms if m in domains[t])
+        allowed[t] = ms
+    chosen: list[int] = []
+    count = 1
+    for t in problem.topological_order:
+        if count >= want:
+            break
+        if len(allowed[t]) >= 2:
+            chosen.append(t)
+            count *= len(allowed[t])
+    if count < 2:
+        return []
+    base = {int(t): tuple(int(m) for m in ms) for t, ms in (domains or {}).items()}
+    parts = [
+        {**base, **{t: (int(m),) for t, m in zip(chosen, combo, strict=True)}}
+        for combo in itertools.product(*(allowed[t] for t in chosen))
+    ]
+    if incumbent is not None:
+        mine = tuple(int(incumbent.mode[t]) for t in chosen)
+        parts.sort(key=lambda d: tuple(d[t][0] for t in chosen) != mine)
+    return parts
+
+
+def _may_fork() -> bool:
+    """Whether :func:`prove` may fork its parts' processes (``fork`` exists and
+    this process is no daemon, which may not have children)."""
+    import multiprocessing
+
+    return (
+        "fork" in multiprocessing.get_all_start_methods()
+        and not multiprocessing.current_process().daemon
+    )
+
+
+def _prove_part(conn: Any, problem: Problem, kwargs: dict[str, Any]) -> None:
+    """A forked process of :func:`prove`'s split: prove one part, send the result back."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    try:
+        res = prove(problem, **kwargs)
+        s = res.schedule
+        conn.send(
+            (
+                "ok",
+                res.makespan,
+                res.bound,
+                res.proven,
+                res.nodes,
+                res.pruned,
+                res.reason,
+                res.counts,
+                None
+                if s is None
+                else (s.mode, s.start, s.end, [w.copy() for w in s.waits], s.blocking),
+            )
+        )
+    except Exception as exc:  # reported by the parent as an InternalError
+        conn.send(("error", repr(exc)))
+    finally:
+        conn.close()
+
+
+def _prove_parts(
+    problem: Problem,
+    parts: list[dict[int, tuple[int, ...]]],
+    workers: int,
+    t0: float,
+    time_limit: float | None,
+    max_nodes: int | None,
+    progress: Any,
+    stop: Any,
+    lower: float,
+    kwargs: dict[str, Any],
+) -> Proof:
+    """:func:`prove` with ``workers`` processes over ``parts`` (see its ``workers``)."""
+    import multiprocessing
+    from multiprocessing.connection import wait
+
+    from multiarm.errors import InternalError
+
+    ctx = multiprocessing.get_context("fork")
+    deadline = math.inf if time_limit is None else t0 + time_limit
+    per_part = None if max_nodes is None else max(1, max_nodes // len(parts))
+    root = max(lower, float(lower_bound_of(problem)))
+    results: dict[int, tuple[Any, ...]] = {}
+    running: dict[Any, tuple[Any, int]] = {}
+    nxt = 0
+    reason = ""
+    try:
+        while nxt < len(parts) or running:
+            while not reason and len(running) < workers and nxt < len(parts):
+                left = deadline - time.perf_counter()
+                if left <= 0:
+                    reason = "time"
+                    break
+                here, there = ctx.Pipe(duplex=False)
+                args = {
+                    **kwargs,
+                    "time_limit": None if time_limit is None else left,
+                    "max_nodes": per_part,
+                    "plain_nodes": -(-int(kwargs.get("plain_nodes", 0)) // len(parts)),
+                    "domains": parts[nxt],
+                }
+                proc = ctx.Process(target=_prove_part, args=(there, problem, args), daemon=True)
+                proc.start()
+                there.close()
+                running[here] = (proc, nxt)
+                nxt += 1
+            if not running:
+                break
+            ready: list[Any] = wait(list(running), timeout=0.2)
+            for conn in ready:
+                proc, k = running.pop(conn)
+                try:
+                    got = tuple(conn.recv())
+                except EOFError:
+                    got = ("error", f"the process of part {k} ended without a result")
+                proc.join(timeout=5.0)
+                if got[0] == "error":
+                    raise InternalError(f"prove: part {k + 1} of {len(parts)} failed: {got[1]}")
+                results[k] = got
+                if got[6] in ("met the lower bound", "found"):
+                    reason = got[6]  # the whole search is answered: end the rest
+                if progress is not None:
+                    progress(
+                        f"exact: part {k + 1} of {len(parts)} {got[6]} after"
+                        f" {time.perf_counter() - t0:.0f} s, {len(results)} done"
+                    )
+            if stop is not None and stop.is_set() and not reason:
+                reason = "stopped"
+            if reason:
+                for proc, _k in running.values():
+                    proc.terminate()
+                for conn, (proc, _k) in list(running.items()):
+                    proc.join(timeout=5.0)
+                    conn.close()
+                running.clear()
+    finally:
+        for proc, _k in running.values():  # an exception (or Ctrl-C) on the way
+            proc.terminate()
+            proc.join(timeout=5.0)
+    best_mk = float(kwargs.get("upper", math.inf))  # as the one-process search starts
+    best_sched: Schedule | None = None
+    if kwargs.get("incumbent") is not None:
+        from scheduler.schedule import validate
+
+        mk = validate(problem, kwargs["incumbent"])
+        if mk < best_mk:
+            best_mk, best_sched = mk, kwargs["incumbent"]
+    nodes = pruned = 0
+    counts: dict[str, int] = {}
+    bound = math.inf
+    why = ""
+    for k in range(len(parts)):  # in part order: the same schedule whichever ended first
+        if k not in results:
+            bound = min(bound, root)  # not searched, or stopped before its result
+            why = why or reason or "time"
+            continue
+        _ok, mk, b, proven, n, pr, r, cnt, sched = results[k]
+        nodes += n
+        pruned += pr
+        for key, v in cnt:
+            counts[key] = counts.get(key, 0) + v
+        if sched is not None and mk < best_mk - 1e-12:
+            best_mk = mk
+            best_sched = Schedule(sched[0], sched[1], sched[2], tuple(sched[3]), sched[4])
+        if not proven:
+            bound = min(bound, b)
+            why = why or r
+    met = best_mk <= lower + _EPS
+    proven = met or not why
+    if reason == "found":
+        proven = False
+        why = "found"
+    seconds = time.perf_counter() - t0
+    return Proof(
+        best_sched,
+        best_mk,
+        best_mk if proven else min(best_mk, max(root, bound)),
+        proven,
+        nodes,
+        pruned,
+        seconds,
+        ("met the lower bound" if met else "proven") if proven else why,
+        (*counts.items(), ("parts", len(parts))),
     )
 
 
