@@ -610,7 +610,8 @@ class Proof:
         does not apply (then nothing was searched).
     counts : tuple of (str, int)
         Work by level: mode assignments completed, arm-sequence leaves reached
-        (``sequences``), kept for the second pass (``kept``) and searched.
+        (``sequences``), kept for the second pass (``kept``) and searched;
+        with ``workers > 1``, summed over the parts, and ``parts``: how many.
     """
 
     schedule: Schedule | None

@@ -120,7 +120,10 @@ class TreeOptions:
     651.28, 641.00, 658.14 s without it, 600.70, 622.30, 615.56 s with it
     (every worker plan valid with the oracle); the other built-in cells
     unchanged; better or equal on 6 of 6 generated problems whose oracle
-    binds. False: the workers search with the oracle, as the main process."""
+    binds. From its sweep (``benchmarks/results/relaxed.md``, seeds 0-2):
+    lower on 10 of 15 runs on ``cell8`` and four generated problems with a
+    binding oracle, higher on none. False: the workers search with the
+    oracle, as the main process."""
     portfolio_max_tasks: int = 40
     """Race CP-SAT (one worker, in a thread) against the tree search on
     problems with at most this many tasks, when the run has a wall-clock
