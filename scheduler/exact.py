@@ -1573,7 +1573,8 @@ def _prove_parts(
                 try:
                     got = tuple(conn.recv())
                 except EOFError:
-                    got = ("error", f"the process of part {k} ended without a result")
+                    got = ("error", f"the process of part {k + 1} ended without a result")
+                conn.close()
                 proc.join(timeout=5.0)
                 if got[0] == "error":
                     raise InternalError(f"prove: part {k + 1} of {len(parts)} failed: {got[1]}")
@@ -1595,9 +1596,10 @@ def _prove_parts(
                     conn.close()
                 running.clear()
     finally:
-        for proc, _k in running.values():  # an exception (or Ctrl-C) on the way
+        for conn, (proc, _k) in running.items():  # an exception (or Ctrl-C) on the way
             proc.terminate()
             proc.join(timeout=5.0)
+            conn.close()
     best_mk = float(kwargs.get("upper", math.inf))  # as the one-process search starts
     best_sched: Schedule | None = None
     if kwargs.get("incumbent") is not None:

@@ -108,7 +108,10 @@ class TreeOptions:
     ``parallel_min_time``, where ``fork`` exists (Linux) and the caller is
     not a daemon process (a daemon, e.g. a Dask worker, searches alone and
     says so in ``stats.extra["workers"]``); work-limited runs
-    stay in one process, so they remain exactly repeatable."""
+    stay in one process, so they remain exactly repeatable. Where the exact
+    phase proves a compiled cell (an idle oracle dropped), no worker process
+    runs beside it: the proof takes the ``workers`` processes
+    (:func:`scheduler.exact.prove`'s ``workers``)."""
     parallel_min_time: float = 1.0
     relaxed_workers: bool = True
     """On a problem with a blocking oracle, the worker processes search the
@@ -851,7 +854,12 @@ def _solve_tree(
                         nodes = 100 * work_limit
                     if cell_proof:
                         stats.extra["exact"] = "prove, idle oracle dropped"  # also beside a race
-                        res, bound = _prove(q, ev, best, lb, deadline - ph, nodes, waits, stop)
+                        # on every core of the portfolio (the proof takes them all),
+                        # with a wall clock only: work-limited runs stay in one process
+                        procs = opt.workers if nodes is None and not daemon else 1
+                        res, bound = _prove(
+                            q, ev, best, lb, deadline - ph, nodes, waits, stop, procs
+                        )
                         lb = max(lb, bound)
                     else:
                         res = exact.branch_and_bound(
@@ -1241,13 +1249,15 @@ def _prove(
     nodes: int | None,
     waits: bool,
     stop: Any,
+    workers: int = 1,
 ) -> tuple[exact.ExactResult, float]:
     """The exact phase on a compiled cell: :func:`scheduler.exact.prove` on
     ``q`` (the problem without its idle oracle), from the best schedule so far
     and the lower bound ``lb``, within ``seconds`` (None when infinite) or
-    ``nodes``, stopped by ``stop``; as the result of
-    :func:`scheduler.exact.branch_and_bound` (``complete``: proven), and
-    the proof's lower bound of the optimum."""
+    ``nodes``, stopped by ``stop``, on ``workers`` processes (no worker
+    process of the tree runs beside it: the machine's cores are the proof's);
+    as the result of :func:`scheduler.exact.branch_and_bound` (``complete``:
+    proven), and the proof's lower bound of the optimum."""
     inc = ev.schedule(best) if best is not None and best.state is not None else None
     upper = best.makespan + 1e-9 if best is not None and inc is None else math.inf
     res = exact.prove(
@@ -1259,6 +1269,7 @@ def _prove(
         lower=lb,
         waits=waits,
         stop=stop,
+        workers=workers,
     )
     out = exact.ExactResult(res.schedule, res.makespan, res.proven, res.nodes, res.pruned)
     return out, res.bound

@@ -118,3 +118,18 @@ def test_a_stop_set_before_the_parts_end_stops_them() -> None:
     res = prove(p, time_limit=60, workers=2, stop=stop)
     assert not res.proven and res.reason == "stopped"
     assert res.bound <= res.makespan
+
+
+def test_a_part_that_fails_is_reported_with_its_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    from multiarm.errors import InternalError
+
+    real = exact.prove
+
+    def broken(*args, **kwargs):  # type: ignore[no-untyped-def]
+        if kwargs.get("domains") is not None:  # a part's process
+            raise RuntimeError("boom")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(exact, "prove", broken)
+    with pytest.raises(InternalError, match=r"part \d+ of \d+ failed: RuntimeError\('boom'\)"):
+        real(_problem(0), max_nodes=5_000_000, workers=2)

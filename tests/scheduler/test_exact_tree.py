@@ -66,3 +66,31 @@ def test_a_small_node_budget_keeps_the_tree_plan_and_no_proof() -> None:
     assert res.bound <= opt.makespan + 1e-9
     if res.status.value == "optimal":
         assert res.objective == pytest.approx(opt.makespan, abs=1e-6)
+
+
+def test_the_exact_phase_proves_on_the_portfolios_cores_with_a_wall_clock(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With a wall-clock limit the exact phase runs ``prove`` on the tree's
+    ``workers`` (no worker process of the tree runs beside it); with a work
+    limit in one process, so that the run stays repeatable."""
+    from scheduler import exact
+
+    real = exact.prove
+    seen: list[int] = []
+
+    def spy(*args, **kwargs):  # type: ignore[no-untyped-def]
+        seen.append(int(kwargs.get("workers", 1)))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(exact, "prove", spy)
+    p = _idle(1)
+    opt = real(p, max_nodes=5_000_000)
+    res = solve(p, "tree", time_limit=5, seed=0, options=TreeOptions(workers=2))
+    assert res.stats.extra["exact"] == "prove, idle oracle dropped"
+    assert 2 in seen  # the exact phase's call (a zone-free proof may call it too)
+    assert res.status.value == "optimal"
+    assert res.objective == pytest.approx(opt.makespan, abs=1e-6)
+    seen.clear()
+    solve(p, "tree", time_limit=None, seed=0, options=TreeOptions(max_evaluations=300, workers=2))
+    assert seen and set(seen) == {1}
