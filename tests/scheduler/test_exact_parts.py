@@ -15,8 +15,7 @@ import threading
 
 import pytest
 
-from scheduler import validate
-from scheduler import exact
+from scheduler import exact, validate
 from scheduler.exact import _parts, prove
 from scheduler.generate import random_problem
 
