@@ -17,11 +17,10 @@ minutes, one run at a time: the tree uses both cores).
 
 from __future__ import annotations
 
-import argparse
 import math
 from typing import Any
 
-from benchmarks.common import output_dir, publish, run_table_sweep, sweep_arguments
+from benchmarks.common import table_main
 
 NAME = "relaxed"
 
@@ -118,16 +117,7 @@ def main(argv: list[str] | None = None) -> None:
     argv : list of str or None
         Command-line arguments (default: ``sys.argv``).
     """
-    ap = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    sweep_arguments(ap)
-    args = ap.parse_args(argv)
-    out = output_dir(args.quick)
-    df = run_table_sweep(NAME, args, out)
-    table = relaxed_table(df)
-    path = publish(NAME, df, table, out, quick=args.quick, flags="--fresh")
-    print(path.read_text())
+    table_main(NAME, relaxed_table, argv, __doc__, speed=False)
 
 
 if __name__ == "__main__":
