@@ -33,8 +33,11 @@ Ctrl-C in :attr:`CtrlC.hit` — the search loops poll it, through
 :class:`StopEvent` — and then raises KeyboardInterrupt as before, except
 inside a :func:`deferred` block, which raises it at its end. The handler
 takes no lock (a handler that waits on a lock its own thread holds hangs).
-A second Ctrl-C raises at once, as Python's default does; after the solve
-the previous handler is back.
+A second Ctrl-C raises at once, as Python's default does, except inside an
+:func:`atomic` block, where it waits for the block's end as the first does
+(a SIGINT every fraction of a millisecond during the moves crashed the
+process there once a first one had been noted); after the solve the
+previous handler is back.
 """
 
 from __future__ import annotations
@@ -51,7 +54,7 @@ __all__ = ["CtrlC", "StopEvent", "atomic", "current", "deferred", "guard"]
 class CtrlC:
     """The Ctrl-C state of one solve (shared by the solves nested in it)."""
 
-    __slots__ = ("_defer", "_pending", "active", "hit")
+    __slots__ = ("_atomic", "_defer", "_pending", "active", "hit")
 
     def __init__(self, active: bool) -> None:
         self.active = active
@@ -59,6 +62,7 @@ class CtrlC:
         self.hit = False
         """Set by the first Ctrl-C during the solve, whatever became of its exception."""
         self._defer = 0
+        self._atomic = 0
         self._pending = False
 
 
@@ -76,6 +80,12 @@ def current() -> CtrlC:
 
 def _on_sigint(signum: int, frame: FrameType | None) -> None:
     c = current()
+    if c.active and c._atomic:
+        # inside a compiled call's callback even a second Ctrl-C waits for the
+        # call's end (raised in there, it can crash the process: atomic)
+        c.hit = True
+        c._pending = True
+        return
     if c.hit or not c.active:  # a second Ctrl-C: Python's default, at once
         raise KeyboardInterrupt
     c.hit = True
@@ -135,13 +145,21 @@ def atomic() -> Iterator[None]:
     """A compiled call that calls back into Python, which a Ctrl-C must not
     enter: a SIGINT during it raises KeyboardInterrupt at its end.
 
-    Inside a solve (:func:`guard`) it is a :func:`deferred` block; outside one,
-    on the main thread under Python's own handler, a handler that only notes
-    the SIGINT is in place for the block; elsewhere nothing changes.
+    Inside a solve (:func:`guard`) it is a :func:`deferred` block in which a
+    second Ctrl-C is deferred too (elsewhere a second one raises at once: in
+    here that could crash the process, and the block is one compiled call);
+    outside one, on the main thread under Python's own handler, a handler
+    that only notes the SIGINT is in place for the block; elsewhere nothing
+    changes.
     """
-    if current().active:
+    c = current()
+    if c.active:
         with deferred():
-            yield
+            c._atomic += 1
+            try:
+                yield
+            finally:
+                c._atomic -= 1
         return
     if (
         threading.current_thread() is not threading.main_thread()

@@ -106,3 +106,26 @@ def test_a_first_ctrl_c_inside_a_solve_comes_after_the_compiled_call() -> None:
             # at once, as Python's own handler does)
             errors += _hammer(call, lambda c=c: c.hit, period)["errors"]
     assert errors == 0
+
+
+def test_a_second_ctrl_c_inside_a_compiled_call_waits_for_its_end() -> None:
+    """Once a first Ctrl-C is noted, a second raises at once, but not inside an
+    ``atomic`` block (a compiled call's callback, where it could crash the
+    process): there it is raised at the block's end. Before the fix the
+    campaign above ended in a segmentation fault now and then on a slow
+    machine (a call outlasting the SIGINT period)."""
+    with _ctrl_c.guard() as c:
+        assert c.active
+        c.hit = True  # as after a first Ctrl-C
+        reached: list[bool] = []
+        with pytest.raises(KeyboardInterrupt), _ctrl_c.atomic():
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(10_000):  # the handler runs between these bytecodes
+                pass
+            reached.append(True)
+        assert reached == [True]
+        # outside the block a second Ctrl-C raises at once, as Python's own does
+        with pytest.raises(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(10_000):
+                pass
